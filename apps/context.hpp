@@ -1,0 +1,51 @@
+#pragma once
+// What every experiment run receives from the command line: seed, output folder, threads,
+// verbosity, and a progress reporter. Experiments never print to stdout (that is for --json).
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <mutex>
+#include <string>
+
+namespace implicit::app {
+
+/// Progress on stderr: a bar with ETA when stderr is a terminal, plain lines otherwise,
+/// nothing when disabled (--quiet or --json). Thread-safe: tick() may be called from workers.
+class Progress {
+ public:
+  Progress(std::string label, std::size_t total, bool enabled);
+  ~Progress();
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+  void tick(std::size_t n = 1);
+  void finish();
+
+ private:
+  void draw(std::size_t done, bool final);
+  std::string label_;
+  std::size_t total_;
+  bool enabled_;
+  bool tty_;
+  std::atomic<std::size_t> done_{0};
+  std::mutex mutex_;
+  std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point last_draw_;
+  int last_percent_ = -1;
+  bool finished_ = false;
+};
+
+struct RunContext {
+  std::uint64_t seed = 1;
+  std::filesystem::path out_dir;  ///< where CSV files go; empty = write none
+  int threads = 0;                ///< 0 = all cores
+  bool quiet = false;             ///< no progress output
+  bool json = false;              ///< --json mode: nothing extra on stderr either
+
+  bool show_progress() const { return !quiet && !json; }
+  /// Path of a CSV file in out_dir (creates the folder); empty path when out_dir is empty.
+  std::filesystem::path csv_path(const std::string& name) const;
+};
+
+}  // namespace implicit::app

@@ -1,0 +1,10 @@
+// Placeholder until the experiment lands: fails with a clear message.
+#include <stdexcept>
+
+#include "experiments.hpp"
+
+namespace implicit::app {
+nlohmann::json run_arm(const ArmSettings&, const RunContext&) {
+  throw std::runtime_error("experiment 'arm' is not implemented yet");
+}
+}  // namespace implicit::app

@@ -1,0 +1,10 @@
+// Placeholder until the experiment lands: fails with a clear message.
+#include <stdexcept>
+
+#include "experiments.hpp"
+
+namespace implicit::app {
+nlohmann::json run_slam(const SlamSettings&, const RunContext&) {
+  throw std::runtime_error("experiment 'slam' is not implemented yet");
+}
+}  // namespace implicit::app

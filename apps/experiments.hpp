@@ -1,0 +1,69 @@
+#pragma once
+// The paper's experiments as functions: each takes its settings and a RunContext, writes its CSV
+// files into ctx.out_dir (when set) and returns one JSON object with the keys documented in
+// docs/cli.md. The subcommands (apps/cmd_*.cpp) and `implicit reproduce` both call these.
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "context.hpp"
+
+namespace implicit::app {
+
+// ---- Path integral control (paper §3) -------------------------------------------------------
+struct SlitSettings {
+  int samples = 50;                 ///< M, samples per psi estimate
+  int runs = 500;                   ///< closed-loop runs (Table 2)
+  std::string mode = "corrected";   ///< "paper" (estimator P) or "corrected" (W2, frozen wall)
+  int naive_mc_small = 5000;        ///< plain Monte Carlo paths (Figure 1)
+  int naive_mc_large = 100000;
+};
+/// Keys: samples, runs, mode, error_x_mean/std/median, error_u_mean/std/median (in %),
+/// crash_fraction, naive_mc_samples, naive_mc_passed, seconds. CSV: figure1_*.csv, figure2_*.csv.
+nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx);
+
+struct ArmSettings {};
+/// Keys: lqr_max_abs_diff, final_angle_error_exact_rad, final_angle_error_wrong_model_rad,
+/// seconds. CSV: figure4_arm.csv.
+nlohmann::json run_arm(const ArmSettings& s, const RunContext& ctx);
+
+struct HimmelblauSettings {
+  int runs = 70;
+  int samples = 50;
+};
+/// Keys: runs, samples, runs_below_10, mean_cost, mean_final_f, newton_final_f, seconds.
+/// CSV: table4_himmelblau.csv, figure5_*.csv.
+nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx);
+
+// ---- Monte Carlo localization (paper §4.1) --------------------------------------------------
+struct MclSettings {
+  std::string method = "implicit";  ///< "standard" (bootstrap) or "implicit"
+  int particles = 100;
+  int runs = 20;
+  std::string data_dir;             ///< empty: the bundled Car Park data
+  std::string config = "A";         ///< noise setting: "A" (P = 0.5) or "B" (P = 0.1)
+  double p = -1.0;                  ///< override P (both diagonal entries); < 0: from config
+};
+/// Keys: method, particles, runs, config, error_percent_mean/std/median, rmse_m,
+/// heading_rmse_rad, ess_mean, cpu_ms_per_step, detections_used, detections_dropped, lost_runs,
+/// seconds. CSV: mcl_<method>_M<particles>_trajectory.csv.
+nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx);
+
+// ---- SLAM (paper §4.2) ----------------------------------------------------------------------
+struct SlamSettings {
+  std::string method = "implicit";  ///< ekf | fastslam1 | fastslam2 | implicit | implicit-rb
+  int particles = 100;
+  int datasets = 50;
+  std::string data_dir;             ///< empty: synthetic Car Park data; else a plain-text log
+  std::string association = "known";  ///< "ml" or "known"
+  std::string truth = "paper";      ///< "paper" (noise-free) or "consistent"
+  int laser_every = 1;              ///< laser update every k-th motion step
+};
+/// Keys: method, particles, datasets, error_percent_mean/std, error_aligned_percent_mean,
+/// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_map_m, nees_mean (consistent mode),
+/// cpu_ms_per_step, peak_memory_mb, seconds. CSV: slam_<method>_M<particles>_{path,map}.csv.
+nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx);
+
+}  // namespace implicit::app

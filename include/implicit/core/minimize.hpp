@@ -1,0 +1,168 @@
+#pragma once
+// Minimising F: damped Newton with Armijo backtracking and Levenberg damping.
+//
+// Implicit sampling starts at mu = argmin F. This minimiser is written for small dense problems
+// evaluated once per particle (fixed-size Eigen types, no allocation when N is fixed), so it
+// never throws: the outcome is a MinimizeStatus in the result. For long paths with
+// block-tridiagonal Hessians see implicit/core/banded.hpp.
+//
+//   auto r = implicit::minimize(target, x0);
+//   if (r.status != implicit::MinimizeStatus::kConverged) { ... }
+//
+// Indefinite Hessians: the Newton system uses H + lambda I with the smallest lambda (grown by
+// factors of 10 from 1e-8 * max|H_ii|) for which the Cholesky factorisation succeeds. Non-finite
+// F along a line search (outside the support, NaN) counts as a failed step and the step is halved.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string_view>
+
+#include <Eigen/Cholesky>
+
+#include "implicit/core/target.hpp"
+#include "implicit/core/types.hpp"
+
+namespace implicit {
+
+enum class MinimizeStatus {
+  kConverged,            ///< gradient or step below tolerance, Hessian SPD at the end
+  kMaxIterations,        ///< iteration limit reached
+  kNonFinite,            ///< F, gradient or Hessian not finite at the start point or a step
+  kNotPositiveDefinite,  ///< converged, but the Hessian at the end is not positive definite
+  kLineSearchFailed,     ///< no step decreased F (F non-smooth, or wrong derivatives)
+};
+
+inline std::string_view to_string(MinimizeStatus s) {
+  switch (s) {
+    case MinimizeStatus::kConverged: return "converged";
+    case MinimizeStatus::kMaxIterations: return "max_iterations";
+    case MinimizeStatus::kNonFinite: return "non_finite";
+    case MinimizeStatus::kNotPositiveDefinite: return "not_positive_definite";
+    case MinimizeStatus::kLineSearchFailed: return "line_search_failed";
+  }
+  return "unknown";
+}
+
+struct MinimizeOptions {
+  int max_iterations = 100;
+  double gradient_tolerance = 1e-10;  ///< stop when max|grad F| <= this
+  double step_tolerance = 1e-12;      ///< stop when max|step| <= this * (1 + max|x|)
+  double armijo = 1e-4;               ///< sufficient-decrease constant
+  int max_backtracks = 60;
+};
+
+template <int N>
+struct MinimizeResult {
+  Vec<N> x;         ///< the minimiser (or the last iterate)
+  double value = std::numeric_limits<double>::quiet_NaN();  ///< F(x)
+  Vec<N> gradient;  ///< grad F(x)
+  Mat<N> hessian;   ///< Hessian of F at x (exact, possibly indefinite)
+  int iterations = 0;
+  int evaluations = 0;
+  MinimizeStatus status = MinimizeStatus::kMaxIterations;
+  bool converged() const { return status == MinimizeStatus::kConverged; }
+};
+
+namespace detail {
+inline bool all_finite(double v) { return std::isfinite(v); }
+template <typename Derived>
+inline bool all_finite(const Eigen::MatrixBase<Derived>& m) {
+  return m.allFinite();
+}
+}  // namespace detail
+
+/// Minimises `f` from x0 by damped Newton. Never throws on algorithm failure; see `status`.
+template <Target T>
+MinimizeResult<T::Dim> minimize(const T& f, const typename T::Vector& x0,
+                                const MinimizeOptions& options = {}) {
+  constexpr int N = T::Dim;
+  using V = Vec<N>;
+  using M = Mat<N>;
+  const int n = f.dim();
+  MinimizeResult<N> r;
+  r.x = x0;
+  r.gradient.resize(n);
+  r.hessian.resize(n, n);
+  r.value = f.evaluate(r.x, &r.gradient, &r.hessian);
+  r.evaluations = 1;
+  if (x0.size() != n || !detail::all_finite(r.value) || !r.gradient.allFinite() ||
+      !r.hessian.allFinite()) {
+    r.status = MinimizeStatus::kNonFinite;
+    return r;
+  }
+  Eigen::LLT<M> llt(n);
+  M damped = M::Zero(n, n);
+  V step = V::Zero(n);
+  V trial = V::Zero(n);
+  r.status = MinimizeStatus::kMaxIterations;
+  for (r.iterations = 0; r.iterations < options.max_iterations; ++r.iterations) {
+    if (r.gradient.cwiseAbs().maxCoeff() <= options.gradient_tolerance) {
+      r.status = MinimizeStatus::kConverged;
+      break;
+    }
+    // Newton direction, Levenberg-damped until the factorisation succeeds.
+    llt.compute(r.hessian);
+    if (llt.info() != Eigen::Success) {
+      const double scale = std::max(1.0, r.hessian.diagonal().cwiseAbs().maxCoeff());
+      double lambda = 1e-8 * scale;
+      for (int k = 0; k < 40; ++k, lambda *= 10.0) {
+        damped = r.hessian;
+        damped.diagonal().array() += lambda;
+        llt.compute(damped);
+        if (llt.info() == Eigen::Success) break;
+      }
+    }
+    if (llt.info() == Eigen::Success) {
+      step = -llt.solve(r.gradient);
+    } else {
+      step = -r.gradient;
+    }
+    double slope = r.gradient.dot(step);
+    if (!(slope < 0.0)) {  // not a descent direction: fall back to steepest descent
+      step = -r.gradient;
+      slope = -r.gradient.squaredNorm();
+    }
+    // Armijo backtracking; non-finite trial values are treated as failed steps.
+    double t = 1.0;
+    double ft = std::numeric_limits<double>::infinity();
+    bool accepted = false;
+    for (int b = 0; b < options.max_backtracks; ++b, t *= 0.5) {
+      trial = r.x + t * step;
+      ft = f.evaluate(trial, nullptr, nullptr);
+      ++r.evaluations;
+      if (std::isfinite(ft) && ft <= r.value + options.armijo * t * slope) {
+        accepted = true;
+        break;
+      }
+    }
+    const double step_size = (t * step).cwiseAbs().maxCoeff();
+    const double x_scale = 1.0 + r.x.cwiseAbs().maxCoeff();
+    if (!accepted) {
+      // No decrease possible at machine precision: converged if the full step was already tiny.
+      r.status = step.cwiseAbs().maxCoeff() <= options.step_tolerance * x_scale * 1e3
+                     ? MinimizeStatus::kConverged
+                     : MinimizeStatus::kLineSearchFailed;
+      break;
+    }
+    r.x = trial;
+    r.value = f.evaluate(r.x, &r.gradient, &r.hessian);
+    ++r.evaluations;
+    if (!std::isfinite(r.value) || !r.gradient.allFinite() || !r.hessian.allFinite()) {
+      r.status = MinimizeStatus::kNonFinite;
+      return r;
+    }
+    if (step_size <= options.step_tolerance * x_scale) {
+      ++r.iterations;
+      r.status = MinimizeStatus::kConverged;
+      break;
+    }
+  }
+  if (r.status == MinimizeStatus::kConverged) {
+    llt.compute(r.hessian);
+    if (llt.info() != Eigen::Success) r.status = MinimizeStatus::kNotPositiveDefinite;
+  }
+  return r;
+}
+
+}  // namespace implicit

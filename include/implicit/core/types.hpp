@@ -1,0 +1,19 @@
+#pragma once
+// Small vocabulary types shared by every layer: fixed- or dynamic-size Eigen vectors and matrices.
+
+#include <Eigen/Core>
+
+namespace implicit {
+
+/// Column vector of dimension N (Eigen::Dynamic for run-time sizes).
+template <int N>
+using Vec = Eigen::Matrix<double, N, 1>;
+
+/// Square matrix N x N (Eigen::Dynamic for run-time sizes).
+template <int N>
+using Mat = Eigen::Matrix<double, N, N>;
+
+inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr double kLog2Pi = 1.83787706640934548356;  // log(2 pi)
+
+}  // namespace implicit

@@ -1,0 +1,16 @@
+#pragma once
+// Convenience header: the implicit sampling core.
+#include "implicit/core/implicit_sampler.hpp"
+#include "implicit/core/jet.hpp"
+#include "implicit/core/laplace.hpp"
+#include "implicit/core/linear_map.hpp"
+#include "implicit/core/minimize.hpp"
+#include "implicit/core/mixture.hpp"
+#include "implicit/core/parallel.hpp"
+#include "implicit/core/random_map.hpp"
+#include "implicit/core/resampling.hpp"
+#include "implicit/core/rng.hpp"
+#include "implicit/core/target.hpp"
+#include "implicit/core/types.hpp"
+#include "implicit/core/version.hpp"
+#include "implicit/core/weights.hpp"
