@@ -63,3 +63,18 @@ std::filesystem::path RunContext::csv_path(const std::string& name) const {
 }
 
 }  // namespace implicit::app
+
+#include <CLI/CLI.hpp>
+
+namespace implicit::app {
+void add_common_options(CLI::App& sub, RunContext& ctx) {
+  sub.add_option("--seed", ctx.seed, "Random seed (runs with the same seed are bit-identical)")
+      ->capture_default_str();
+  sub.add_flag("--json", ctx.json, "Print one JSON object on stdout and nothing else");
+  sub.add_option("--out", ctx.out_dir, "Folder for CSV output (figures, trajectories)");
+  sub.add_option("--threads", ctx.threads, "Worker threads (0 = all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  sub.add_flag("--quiet", ctx.quiet, "No progress output on stderr");
+}
+}  // namespace implicit::app

@@ -49,3 +49,12 @@ struct RunContext {
 };
 
 }  // namespace implicit::app
+
+namespace CLI {
+class App;
+}
+
+namespace implicit::app {
+/// Adds the options every subcommand shares: --seed, --json, --out, --threads, --quiet.
+void add_common_options(CLI::App& sub, RunContext& ctx);
+}  // namespace implicit::app
