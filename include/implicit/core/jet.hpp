@@ -30,8 +30,12 @@ struct Jet2 {
   Mat<N> h;
 
   Jet2() : g(Vec<N>::Zero(N == Eigen::Dynamic ? 0 : N)), h(Mat<N>::Zero(g.size(), g.size())) {}
-  // A constant: value c, zero derivatives of dimension `dim`.
-  explicit Jet2(double c, int dim = N) : v(c), g(Vec<N>::Zero(dim)), h(Mat<N>::Zero(dim, dim)) {}
+  // A constant: value c, zero derivatives of dimension `dim`. For N = Eigen::Dynamic the default
+  // is a size-0 constant, which adopts the size of the first sized jet it is combined with.
+  explicit Jet2(double c, int dim = N)
+      : v(c),
+        g(Vec<N>::Zero(dim < 0 ? 0 : dim)),
+        h(Mat<N>::Zero(dim < 0 ? 0 : dim, dim < 0 ? 0 : dim)) {}
   Jet2(double value, const Vec<N>& grad, const Mat<N>& hess) : v(value), g(grad), h(hess) {}
 
   /// The i-th independent variable with value x (gradient e_i).
@@ -45,8 +49,14 @@ struct Jet2 {
   Jet2& operator-=(const Jet2& o) { return *this = *this - o; }
   Jet2& operator*=(const Jet2& o) { return *this = *this * o; }
   Jet2& operator/=(const Jet2& o) { return *this = *this / o; }
-  Jet2& operator+=(double c) { v += c; return *this; }
-  Jet2& operator-=(double c) { v -= c; return *this; }
+  Jet2& operator+=(double c) {
+    v += c;
+    return *this;
+  }
+  Jet2& operator-=(double c) {
+    v -= c;
+    return *this;
+  }
   Jet2& operator*=(double c) { return *this = *this * c; }
   Jet2& operator/=(double c) { return *this = *this * (1.0 / c); }
 };
@@ -132,13 +142,19 @@ inline Jet2<N> operator/(double c, const Jet2<N>& b) {
 }
 
 // Comparisons look at values only (for branches inside user functors).
-#define IMPLICIT_JET_COMPARE(op)                                                          \
-  template <int N>                                                                        \
-  inline bool operator op(const Jet2<N>& a, const Jet2<N>& b) { return a.v op b.v; }      \
-  template <int N>                                                                        \
-  inline bool operator op(const Jet2<N>& a, double b) { return a.v op b; }                \
-  template <int N>                                                                        \
-  inline bool operator op(double a, const Jet2<N>& b) { return a op b.v; }
+#define IMPLICIT_JET_COMPARE(op)                                \
+  template <int N>                                              \
+  inline bool operator op(const Jet2<N>& a, const Jet2<N>& b) { \
+    return a.v op b.v;                                          \
+  }                                                             \
+  template <int N>                                              \
+  inline bool operator op(const Jet2<N>& a, double b) {         \
+    return a.v op b;                                            \
+  }                                                             \
+  template <int N>                                              \
+  inline bool operator op(double a, const Jet2<N>& b) {         \
+    return a op b.v;                                            \
+  }
 IMPLICIT_JET_COMPARE(<)
 IMPLICIT_JET_COMPARE(<=)
 IMPLICIT_JET_COMPARE(>)
@@ -263,8 +279,15 @@ struct NumTraits<implicit::Jet2<N>> : NumTraits<double> {
   using NonInteger = implicit::Jet2<N>;
   using Nested = implicit::Jet2<N>;
   using Literal = implicit::Jet2<N>;
-  enum { IsComplex = 0, IsInteger = 0, IsSigned = 1, RequireInitialization = 1, ReadCost = 1,
-         AddCost = 3, MulCost = 3 };
+  enum {
+    IsComplex = 0,
+    IsInteger = 0,
+    IsSigned = 1,
+    RequireInitialization = 1,
+    ReadCost = 1,
+    AddCost = 3,
+    MulCost = 3
+  };
 };
 template <int N, typename BinaryOp>
 struct ScalarBinaryOpTraits<implicit::Jet2<N>, double, BinaryOp> {
