@@ -8,11 +8,12 @@
 
 namespace implicit::app {
 
-Progress::Progress(std::string label, std::size_t total, bool enabled)
+Progress::Progress(std::string label, std::size_t total, bool enabled, Style style)
     : label_(std::move(label)),
       total_(total),
       enabled_(enabled && total > 0),
-      tty_(isatty(fileno(stderr)) != 0),
+      tty_(style == Style::kAuto && isatty(fileno(stderr)) != 0),
+      every_tick_(style == Style::kLines),
       start_(std::chrono::steady_clock::now()),
       last_draw_(start_) {}
 
@@ -23,6 +24,11 @@ void Progress::tick(std::size_t n) {
   if (enabled_) draw(done, false);
 }
 
+void Progress::tick(std::size_t n, const std::string& note) {
+  const std::size_t done = done_.fetch_add(n) + n;
+  if (enabled_) draw(done, false, note);
+}
+
 void Progress::finish() {
   if (!enabled_ || finished_) return;
   draw(done_.load(), true);
@@ -30,7 +36,7 @@ void Progress::finish() {
   finished_ = true;
 }
 
-void Progress::draw(std::size_t done, bool final) {
+void Progress::draw(std::size_t done, bool final, const std::string& note) {
   std::lock_guard lock(mutex_);
   if (finished_) return;
   const auto now = std::chrono::steady_clock::now();
@@ -48,10 +54,16 @@ void Progress::draw(std::size_t done, bool final) {
                elapsed, eta);
     if (final) fmt::print(stderr, "\n");
   } else {
-    // Plain lines: every 10 % and at the end.
-    if (!final && (percent / 10 == last_percent_ / 10)) return;
+    // Plain lines: every 10 % and at the end (every tick in Style::kLines).
+    if (!final && !every_tick_ && (percent / 10 == last_percent_ / 10)) return;
+    if (final && every_tick_ && last_percent_ == 100) return;  // the last tick said it all
     last_percent_ = percent;
-    fmt::print(stderr, "{}: {}/{} ({}%), {:.1f}s\n", label_, done, total_, percent, elapsed);
+    const double eta = fraction > 0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
+    if (every_tick_)
+      fmt::print(stderr, "{}: {}% done, {:.1f}s elapsed, ETA {:.0f}s{}{}\n", label_, percent,
+                 elapsed, eta, note.empty() ? "" : "; next: ", note);
+    else
+      fmt::print(stderr, "{}: {}/{} ({}%), {:.1f}s\n", label_, done, total_, percent, elapsed);
   }
   std::fflush(stderr);
 }
@@ -71,10 +83,17 @@ void add_common_options(CLI::App& sub, RunContext& ctx) {
   sub.add_option("--seed", ctx.seed, "Random seed (runs with the same seed are bit-identical)")
       ->capture_default_str();
   sub.add_flag("--json", ctx.json, "Print one JSON object on stdout and nothing else");
-  sub.add_option("--out", ctx.out_dir, "Folder for CSV output (figures, trajectories)");
+  auto* out = sub.add_option("--out", ctx.out_dir, "Folder for CSV output (figures, trajectories)");
+  if (!ctx.out_dir.empty()) out->capture_default_str();
   sub.add_option("--threads", ctx.threads, "Worker threads (0 = all cores)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
   sub.add_flag("--quiet", ctx.quiet, "No progress output on stderr");
+}
+
+void set_examples(CLI::App& sub, const std::vector<std::string>& commands) {
+  std::string text = "\nExamples:\n";
+  for (const auto& c : commands) text += "  " + c + "\n";
+  sub.footer(text);
 }
 }  // namespace implicit::app

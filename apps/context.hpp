@@ -8,26 +8,37 @@
 #include <filesystem>
 #include <mutex>
 #include <string>
+#include <vector>
 
 namespace implicit::app {
 
 /// Progress on stderr: a bar with ETA when stderr is a terminal, plain lines otherwise,
 /// nothing when disabled (--quiet or --json). Thread-safe: tick() may be called from workers.
+///
+///   Progress bar("MCL runs", runs, ctx.show_progress());
+///   parallel_for(runs, [&](std::size_t r) { ...; bar.tick(); });
+///
+/// Style::kLines prints one line per tick whatever stderr is: for an outer loop whose items
+/// draw their own bars (`implicit reproduce`), so the two never share a terminal line.
 class Progress {
  public:
-  Progress(std::string label, std::size_t total, bool enabled);
+  enum class Style { kAuto, kLines };
+  Progress(std::string label, std::size_t total, bool enabled, Style style = Style::kAuto);
   ~Progress();
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
   void tick(std::size_t n = 1);
+  /// Like tick(n), and names what comes next in the printed line ("next: slit M=50").
+  void tick(std::size_t n, const std::string& note);
   void finish();
 
  private:
-  void draw(std::size_t done, bool final);
+  void draw(std::size_t done, bool final, const std::string& note = {});
   std::string label_;
   std::size_t total_;
   bool enabled_;
   bool tty_;
+  bool every_tick_ = false;
   std::atomic<std::size_t> done_{0};
   std::mutex mutex_;
   std::chrono::steady_clock::time_point start_;
@@ -56,5 +67,11 @@ class App;
 
 namespace implicit::app {
 /// Adds the options every subcommand shares: --seed, --json, --out, --threads, --quiet.
+/// Set ctx.out_dir before the call to give --out a default (shown in --help).
 void add_common_options(CLI::App& sub, RunContext& ctx);
+
+/// Appends an "Examples:" block to the subcommand's --help, one command per line:
+///   set_examples(sub, {"implicit slit --samples 50 --runs 100",
+///                      "implicit slit --mode paper --json > slit.json"});
+void set_examples(CLI::App& sub, const std::vector<std::string>& commands);
 }  // namespace implicit::app

@@ -1,13 +1,16 @@
 // The `implicit` command-line tool: one subcommand per experiment of the paper, and `reproduce`.
-// Exit codes: 0 success, 1 an experiment failed, 2 bad command line (CLI11's usage errors).
+// Exit codes (docs/cli.md): 0 success; 1 an error (message on stderr); 2 bad command line
+// (unknown flag, bad value: CLI11 names the flag and the accepted range); 3 `reproduce` wrote its
+// report but at least one experiment or figure failed.
 
 #include <algorithm>
 #include <cstdio>
 #include <exception>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
+#include "context.hpp"
 #include "implicit/core/version.hpp"
 #include "registry.hpp"
 
@@ -20,21 +23,38 @@ std::vector<Subcommand>& subcommands() {
 
 int main(int argc, char** argv) {
   using namespace implicit::app;
-  CLI::App app{"implicit: implicit sampling for path integral control, Monte Carlo localization "
-               "and SLAM"};
+  CLI::App app{
+      "implicit: implicit sampling for path integral control, Monte Carlo localization "
+      "and SLAM"};
   app.require_subcommand(0, 1);
-  app.set_version_flag("--version",
-                       fmt::format("implicit {} (commit {})", implicit::version(),
-                                   implicit::git_commit()));
+  app.set_version_flag("--version", fmt::format("implicit {} (commit {})", implicit::version(),
+                                                implicit::git_commit()));
+  app.footer(
+      "\nExamples:\n"
+      "  implicit reproduce --quick --out out   # every table and figure, reduced settings\n"
+      "  implicit slit --samples 50 --json      # one experiment, result as JSON\n"
+      "  implicit <subcommand> --help           # options of one subcommand\n"
+      "\nExit codes: 0 success, 1 error, 2 bad command line, 3 report written but an experiment "
+      "or figure failed.\n");
   auto& list = subcommands();
   std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
-  for (auto& s : list) s.setup(*app.add_subcommand(s.name, s.description));
+  for (auto& s : list) {
+    CLI::App* sub = app.add_subcommand(s.name, s.description);
+    s.setup(*sub);
+    // Every subcommand shows at least one example, even before its owner writes better ones.
+    if (sub->get_footer().empty())
+      set_examples(*sub, {fmt::format("implicit {} --json", s.name),
+                          fmt::format("implicit {} --seed 7 --out out/{}", s.name, s.name)});
+  }
   try {
     app.parse(argc, argv);
     if (app.get_subcommands().empty()) {
       fmt::print("{}", app.help());
       return 0;
     }
+  } catch (const CLI::RuntimeError& e) {
+    // Thrown by a subcommand to choose its exit code after reporting on stderr itself.
+    return e.get_exit_code();
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;

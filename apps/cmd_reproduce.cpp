@@ -1,0 +1,521 @@
+// `implicit reproduce`: every experiment of the paper in one run, with the report of
+// apps/report.hpp (the paper's Tables 2, 4, 5, 6 and Figures 1, 2, 4, 5, 6, 7, side by side).
+//
+// Each configuration runs in-process and in its own try/catch: a failing experiment is marked
+// failed in results.json and the report, and the others still run. Figures are drawn by
+// python/plots/figureN.py from the CSV files the experiments write; a missing or failing script
+// marks that figure failed without stopping the report.
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <thread>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "context.hpp"
+#include "experiments.hpp"
+#include "implicit/build_info.hpp"
+#include "implicit/core/error.hpp"
+#include "implicit/core/parallel.hpp"
+#include "registry.hpp"
+#include "report.hpp"
+
+namespace implicit::app {
+namespace {
+
+using nlohmann::json;
+
+const std::vector<std::string> kExperiments = {"slit", "arm", "himmelblau", "mcl", "slam"};
+
+struct ReproduceOptions {
+  bool quick = false;
+  bool report_only = false;
+  bool no_figures = false;
+  std::vector<std::string> only;
+};
+
+/// One configuration of one experiment: what to call, with which settings.
+struct Config {
+  std::string experiment;
+  std::string label;  ///< human-readable, also the folder name of its CSV output
+  json settings;
+  double weight = 1.0;          ///< rough relative cost, for the overall ETA
+  bool writes_figures = false;  ///< its CSV files go to DIR itself (the figure data)
+  std::function<json(const RunContext&)> run;
+};
+
+// ---- The plan ---------------------------------------------------------------------------------
+
+json to_json(const SlitSettings& s) {
+  return {{"samples", s.samples},
+          {"runs", s.runs},
+          {"mode", s.mode},
+          {"naive_mc_small", s.naive_mc_small},
+          {"naive_mc_large", s.naive_mc_large}};
+}
+json to_json(const HimmelblauSettings& s) { return {{"runs", s.runs}, {"samples", s.samples}}; }
+json to_json(const MclSettings& s) {
+  return {{"method", s.method},     {"particles", s.particles}, {"runs", s.runs},
+          {"data_dir", s.data_dir}, {"config", s.config},       {"p", s.p}};
+}
+json to_json(const SlamSettings& s) {
+  return {{"method", s.method},          {"particles", s.particles},     {"datasets", s.datasets},
+          {"data_dir", s.data_dir},      {"association", s.association}, {"truth", s.truth},
+          {"laser_every", s.laser_every}};
+}
+
+/// The sweep behind each table. Full settings follow the paper (Table 2: 500 runs; Table 5:
+/// its M values over 20 seeds; Table 6: 50 data sets at M = 100) within about 15 minutes on
+/// 2 cores; --quick keeps every table and figure but with few runs, for about 2 minutes.
+struct Plan {
+  std::vector<Config> configs;
+  json settings;  ///< per experiment, the sweep as a whole (for the report)
+};
+
+Plan make_plan(bool quick, const std::vector<std::string>& only) {
+  auto selected = [&](const std::string& e) {
+    return only.empty() || std::find(only.begin(), only.end(), e) != only.end();
+  };
+  Plan plan;
+  if (selected("slit")) {
+    const std::vector<int> ms = {10, 50, 100, 500};
+    const int runs = quick ? 20 : 500;
+    plan.settings["slit"] = {{"modes", {"paper", "corrected"}},
+                             {"samples", ms},
+                             {"runs", runs},
+                             {"figure_data", "mode corrected, M = 50"}};
+    for (const std::string mode : {"paper", "corrected"})
+      for (int m : ms) {
+        SlitSettings s;
+        s.samples = m;
+        s.runs = runs;
+        s.mode = mode;
+        plan.configs.push_back({"slit", fmt::format("slit {} M={}", mode, m), to_json(s),
+                                runs * (0.002 + 1e-4 * m), mode == "corrected" && m == 50,
+                                [s](const RunContext& ctx) { return run_slit(s, ctx); }});
+      }
+  }
+  if (selected("arm")) {
+    plan.settings["arm"] = json::object({{"parameters", "specification §2.5.4"}});
+    plan.configs.push_back({"arm", "arm", json::object(), 0.5, true,
+                            [](const RunContext& ctx) { return run_arm(ArmSettings{}, ctx); }});
+  }
+  if (selected("himmelblau")) {
+    HimmelblauSettings s;
+    s.runs = quick ? 20 : 70;
+    s.samples = 50;
+    plan.settings["himmelblau"] = to_json(s);
+    plan.configs.push_back({"himmelblau", fmt::format("himmelblau runs={}", s.runs), to_json(s),
+                            0.05 * s.runs, true,
+                            [s](const RunContext& ctx) { return run_himmelblau(s, ctx); }});
+  }
+  if (selected("mcl")) {
+    struct Sweep {
+      std::string config;
+      std::string method;
+      std::vector<int> ms;
+      int runs;
+    };
+    std::vector<Sweep> sweeps;
+    if (quick) {
+      sweeps = {{"A", "implicit", {10, 100}, 3},
+                {"A", "standard", {10, 100}, 3},
+                {"B", "implicit", {100}, 3},
+                {"B", "standard", {100}, 3}};
+    } else {
+      sweeps = {{"A", "implicit", {10, 20, 40, 80, 100, 150, 300, 1000}, 20},
+                {"A", "standard", {10, 20, 40, 80, 100, 150, 200, 250, 300, 1000}, 20},
+                {"B", "implicit", {100, 300}, 20},
+                {"B", "standard", {100, 300}, 20}};
+    }
+    json sweep_json = json::array();
+    for (const auto& sw : sweeps) {
+      sweep_json.push_back(
+          {{"config", sw.config}, {"method", sw.method}, {"particles", sw.ms}, {"runs", sw.runs}});
+      for (int m : sw.ms) {
+        MclSettings s;
+        s.method = sw.method;
+        s.particles = m;
+        s.runs = sw.runs;
+        s.config = sw.config;
+        const bool figure = sw.config == "A" && sw.method == "implicit" && m == 100;
+        plan.configs.push_back(
+            {"mcl", fmt::format("mcl {} M={} config {}", sw.method, m, sw.config), to_json(s),
+             sw.runs * (0.05 + 0.005 * m * (sw.method == "implicit" ? 2.0 : 1.0)), figure,
+             [s](const RunContext& ctx) { return run_mcl(s, ctx); }});
+      }
+    }
+    plan.settings["mcl"] = {{"sweeps", sweep_json},
+                            {"data", "bundled Car Park data"},
+                            {"figure_data", "implicit, M = 100, config A"}};
+  }
+  if (selected("slam")) {
+    struct Sweep {
+      std::string method;
+      std::vector<int> ms;
+      int datasets;
+    };
+    std::vector<Sweep> sweeps;
+    const std::vector<std::string> pf = {"fastslam1", "fastslam2", "implicit", "implicit-rb"};
+    if (quick) {
+      sweeps.push_back({"ekf", {100}, 2});
+      for (const auto& m : pf) sweeps.push_back({m, {100}, 2});
+    } else {
+      sweeps.push_back({"ekf", {100}, 50});
+      for (const auto& m : pf) sweeps.push_back({m, {100}, 50});
+      for (const auto& m : pf) sweeps.push_back({m, {10, 20, 50, 200}, 5});
+    }
+    json sweep_json = json::array();
+    for (const auto& sw : sweeps) {
+      sweep_json.push_back(
+          {{"method", sw.method}, {"particles", sw.ms}, {"datasets", sw.datasets}});
+      for (int m : sw.ms) {
+        SlamSettings s;
+        s.method = sw.method;
+        s.particles = m;
+        s.datasets = sw.datasets;
+        const bool figure = sw.method == "implicit" && m == 100;
+        plan.configs.push_back(
+            {"slam",
+             sw.method == "ekf"
+                 ? fmt::format("slam ekf datasets={}", sw.datasets)
+                 : fmt::format("slam {} M={} datasets={}", sw.method, m, sw.datasets),
+             to_json(s), sw.datasets * (sw.method == "ekf" ? 0.3 : 0.05 + 0.015 * m), figure,
+             [s](const RunContext& ctx) { return run_slam(s, ctx); }});
+      }
+    }
+    plan.settings["slam"] = {{"sweeps", sweep_json},
+                             {"data",
+                              "synthetic Car Park data (paper-like truth, known "
+                              "association)"},
+                             {"figure_data", "implicit (A), M = 100"}};
+  }
+  return plan;
+}
+
+// ---- Machine and build -----------------------------------------------------------------------
+
+std::string cpu_model() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) {
+        auto s = line.substr(colon + 1);
+        s.erase(0, s.find_first_not_of(" \t"));
+        return s;
+      }
+    }
+  return "unknown";
+}
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buffer;
+}
+
+std::string folder_name(const std::string& label) {
+  std::string out;
+  for (char c : label) {
+    if (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.')
+      out += c;
+    else if (c == '=')
+      continue;
+    else if (!out.empty() && out.back() != '_')
+      out += '_';
+  }
+  return out;
+}
+
+void write_text(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  if (!out) throw InvalidArgument(fmt::format("cannot write {}", file.string()));
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    if (c == '\'')
+      out += "'\\''";
+    else
+      out += c;
+  }
+  return out + "'";
+}
+
+std::string tail(const std::filesystem::path& file, std::size_t lines) {
+  std::ifstream in(file);
+  std::vector<std::string> all;
+  std::string line;
+  while (std::getline(in, line))
+    if (!line.empty()) all.push_back(line);
+  std::string out;
+  for (std::size_t i = all.size() > lines ? all.size() - lines : 0; i < all.size(); ++i)
+    out += (out.empty() ? "" : " / ") + all[i];
+  return out;
+}
+
+// ---- Figures ----------------------------------------------------------------------------------
+
+struct FigureSpec {
+  int number;
+  std::string experiment;
+};
+const std::vector<FigureSpec> kFigures = {{1, "slit"},       {2, "slit"}, {4, "arm"},
+                                          {5, "himmelblau"}, {6, "mcl"},  {7, "slam"}};
+
+std::filesystem::path plots_dir() {
+  if (const char* env = std::getenv("IMPLICIT_PLOTS_DIR"); env && *env) return env;
+  return std::filesystem::path(IMPLICIT_SOURCE_DIR) / "python" / "plots";
+}
+
+json draw_figures(const json& results, const std::filesystem::path& dir, bool no_figures,
+                  bool show) {
+  json figures = json::object();
+  const char* python_env = std::getenv("IMPLICIT_PYTHON");
+  const std::string python = python_env && *python_env ? python_env : "/usr/bin/python3";
+  setenv("MPLBACKEND", "Agg", 0);  // no display needed
+  const auto logs = dir / "logs";
+  for (const auto& f : kFigures) {
+    const std::string key = fmt::format("figure{}", f.number);
+    const auto script = plots_dir() / (key + ".py");
+    json entry = {{"experiment", f.experiment}, {"script", script.string()}};
+    std::string exp_status = "skipped";
+    if (results.contains("experiments") && results["experiments"].contains(f.experiment))
+      exp_status = results["experiments"][f.experiment].value("status", exp_status);
+    if (no_figures || exp_status == "skipped") {
+      entry["status"] = "skipped";
+      entry["error"] = no_figures ? "--no-figures" : "experiment not selected (--only)";
+    } else if (exp_status == "failed") {
+      entry["status"] = "failed";
+      entry["error"] = fmt::format("experiment {} failed", f.experiment);
+    } else if (!std::filesystem::exists(script)) {
+      entry["status"] = "failed";
+      entry["error"] = fmt::format("plot script {} not found", script.string());
+    } else {
+      std::filesystem::create_directories(logs);
+      const auto log = logs / (key + ".log");
+      const auto png = dir / (key + ".png");
+      const auto svg = dir / (key + ".svg");
+      std::filesystem::remove(png);
+      std::filesystem::remove(svg);
+      if (show) fmt::print(stderr, "reproduce: drawing {}\n", key);
+      const auto start = std::chrono::steady_clock::now();
+      const std::string command =
+          fmt::format("{} {} {} > {} 2>&1", shell_quote(python), shell_quote(script.string()),
+                      shell_quote(dir.string()), shell_quote(log.string()));
+      const int raw = std::system(command.c_str());
+      const int code = raw == -1 ? -1 : (WIFEXITED(raw) ? WEXITSTATUS(raw) : 128);
+      entry["seconds"] =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      entry["log"] = (std::filesystem::path("logs") / (key + ".log")).string();
+      if (code != 0) {
+        entry["status"] = "failed";
+        entry["error"] = fmt::format("{} exited with code {}: {}", script.filename().string(), code,
+                                     tail(log, 3));
+      } else if (!std::filesystem::exists(png)) {
+        entry["status"] = "failed";
+        entry["error"] =
+            fmt::format("{} did not write {}", script.filename().string(), png.filename().string());
+      } else {
+        entry["status"] = "ok";
+        json files = {png.filename().string()};
+        if (std::filesystem::exists(svg)) files.push_back(svg.filename().string());
+        entry["files"] = files;
+      }
+    }
+    figures[key] = entry;
+  }
+  return figures;
+}
+
+// ---- The run -----------------------------------------------------------------------------------
+
+json run_plan(const Plan& plan, const RunContext& ctx, const ReproduceOptions& opt) {
+  json experiments = json::object();
+  for (const auto& e : kExperiments)
+    experiments[e] = {{"status", "skipped"}, {"seconds", 0.0}, {"runs", json::array()}};
+  // Weights in milli-units so that Progress's integer counter can carry them.
+  auto units = [](const Config& c) {
+    return std::max<std::size_t>(1, static_cast<std::size_t>(c.weight * 1000.0));
+  };
+  std::size_t total_units = 0;
+  for (const auto& c : plan.configs) total_units += units(c);
+  Progress overall("reproduce", total_units, ctx.show_progress(), Progress::Style::kLines);
+  if (ctx.show_progress() && !plan.configs.empty())
+    fmt::print(stderr, "reproduce: {} configurations ({} settings); first: {}\n",
+               plan.configs.size(), opt.quick ? "quick" : "full", plan.configs.front().label);
+  for (std::size_t i = 0; i < plan.configs.size(); ++i) {
+    const auto& c = plan.configs[i];
+    RunContext run_ctx = ctx;
+    run_ctx.out_dir = c.writes_figures ? ctx.out_dir : ctx.out_dir / "runs" / folder_name(c.label);
+    json entry = {{"label", c.label}, {"settings", c.settings}};
+    const auto start = std::chrono::steady_clock::now();
+    try {
+      entry["result"] = c.run(run_ctx);
+      entry["status"] = "ok";
+    } catch (const std::exception& e) {
+      entry["status"] = "failed";
+      entry["error"] = e.what();
+    } catch (...) {
+      entry["status"] = "failed";
+      entry["error"] = "unknown exception";
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    entry["seconds"] = seconds;
+    if (ctx.show_progress() && entry["status"] == "failed")
+      fmt::print(stderr, "reproduce: {} failed: {}\n", c.label, entry["error"].get<std::string>());
+    auto& e = experiments[c.experiment];
+    e["runs"].push_back(entry);
+    e["seconds"] = e["seconds"].get<double>() + seconds;
+    overall.tick(units(c), i + 1 < plan.configs.size() ? plan.configs[i + 1].label : "report");
+  }
+  overall.finish();
+  for (auto& [name, e] : experiments.items()) {
+    if (e["runs"].empty()) continue;
+    std::size_t good = 0;
+    for (const auto& r : e["runs"]) good += r["status"] == "ok";
+    e["status"] = good == e["runs"].size() ? "ok" : good == 0 ? "failed" : "partial";
+    e["configurations"] = e["runs"].size();
+    e["failed"] = e["runs"].size() - good;
+  }
+  return experiments;
+}
+
+std::string command_line(const RunContext& ctx, const ReproduceOptions& opt) {
+  std::string s =
+      fmt::format("implicit reproduce --out {} --seed {}", ctx.out_dir.string(), ctx.seed);
+  if (ctx.threads > 0) s += fmt::format(" --threads {}", ctx.threads);
+  if (opt.quick) s += " --quick";
+  if (!opt.only.empty()) {
+    s += " --only ";
+    for (std::size_t i = 0; i < opt.only.size(); ++i) s += (i ? "," : "") + opt.only[i];
+  }
+  return s;
+}
+
+/// Writes results.json, the table CSVs, the figures and the report; returns the exit code.
+int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt) {
+  const auto& dir = ctx.out_dir;
+  // Tables and a first results.json before the plot scripts, which may read both.
+  results["tables"] = report::write_table_csvs(results, dir);
+  results["figures"] = json::object();
+  write_text(dir / "results.json", results.dump(2) + "\n");
+  results["figures"] = draw_figures(results, dir, opt.no_figures, ctx.show_progress());
+  write_text(dir / "results.json", results.dump(2) + "\n");
+  const auto doc = report::build_report(results, dir);
+  write_text(dir / "report.md", doc.markdown());
+  write_text(dir / "report.html",
+             doc.html("Reproduction report: implicit sampling (Morzfeld 2015)"));
+
+  bool all_ok = true;
+  for (const auto& [name, e] : results["experiments"].items())
+    if (e["status"] != "ok" && e["status"] != "skipped") all_ok = false;
+  for (const auto& [name, f] : results["figures"].items())
+    if (f["status"] == "failed") all_ok = false;
+
+  if (ctx.json) {
+    fmt::print("{}\n", results.dump(2));
+  } else if (!ctx.quiet) {
+    fmt::print("Report: {} and {}\n", (dir / "report.html").string(), (dir / "report.md").string());
+    for (const auto& name : kExperiments) {
+      const auto& e = results["experiments"][name];
+      if (!e.is_object()) continue;
+      fmt::print("  {:<11} {:<8} {:>7.1f} s\n", name, e["status"].get<std::string>(),
+                 e["seconds"].get<double>());
+    }
+    for (const auto& [name, f] : results["figures"].items())
+      fmt::print("  {:<11} {}\n", name, f["status"].get<std::string>());
+  }
+  return all_ok ? 0 : 3;
+}
+
+int reproduce(RunContext ctx, const ReproduceOptions& opt) {
+  ctx.out_dir = std::filesystem::absolute(ctx.out_dir);
+  std::filesystem::create_directories(ctx.out_dir);
+  json results;
+  if (opt.report_only) {
+    const auto file = ctx.out_dir / "results.json";
+    std::ifstream in(file);
+    if (!in)
+      throw InvalidArgument(
+          fmt::format("--report-only: expected {} from an earlier run, got no "
+                      "such file",
+                      file.string()));
+    try {
+      results = json::parse(in);
+    } catch (const json::parse_error& e) {
+      throw ParseError(fmt::format("{}: {}", file.string(), e.what()));
+    }
+    return finish(results, ctx, opt);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  ThreadLimit limit(ctx.threads);
+  const Plan plan = make_plan(opt.quick, opt.only);
+  results["schema"] = "implicit-reproduce-1";
+  results["version"] = build_info::version;
+  results["commit"] = build_info::commit;
+  results["compiler"] = build_info::compiler;
+  results["build_type"] = build_info::build_type;
+  results["cxx_flags"] = build_info::cxx_flags;
+  results["cpu_model"] = cpu_model();
+  results["hardware_threads"] = std::thread::hardware_concurrency();
+  results["threads"] = active_threads();
+  results["seed"] = ctx.seed;
+  results["quick"] = opt.quick;
+  results["only"] = opt.only;
+  results["command"] = command_line(ctx, opt);
+  results["started_utc"] = utc_now();
+  results["settings"] = plan.settings;
+  results["paper"] = report::paper_numbers();
+  results["reference"] = report::reference_numbers();
+  results["experiments"] = run_plan(plan, ctx, opt);
+  results["seconds_total"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return finish(results, ctx, opt);
+}
+
+Registrar reg{
+    "reproduce",
+    "Every table and figure of the paper, side by side with ours: DIR/report.html, report.md, "
+    "results.json",
+    [](CLI::App& sub) {
+      static RunContext ctx;
+      static ReproduceOptions opt;
+      ctx.out_dir = "out";
+      add_common_options(sub, ctx);
+      sub.add_flag("--quick", opt.quick,
+                   "Reduced runs (about 2 minutes instead of 15); the report says which");
+      sub.add_option("--only", opt.only, "Run a subset of the experiments (comma-separated)")
+          ->delimiter(',')
+          ->check(CLI::IsMember(kExperiments));
+      sub.add_flag("--report-only", opt.report_only,
+                   "Rebuild the report and figures from DIR/results.json without running");
+      sub.add_flag("--no-figures", opt.no_figures, "Do not run the plot scripts");
+      set_examples(sub, {"implicit reproduce                       # full settings into out/",
+                         "implicit reproduce --quick --out /tmp/r  # about 2 minutes",
+                         "implicit reproduce --only slit,arm --threads 2 --seed 7",
+                         "implicit reproduce --report-only --out out  # redraw from results.json"});
+      sub.callback([] {
+        const int code = reproduce(ctx, opt);
+        if (code != 0) throw CLI::RuntimeError(code);
+      });
+    }};
+
+}  // namespace
+}  // namespace implicit::app
