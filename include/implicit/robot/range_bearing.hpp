@@ -70,6 +70,25 @@ class RangeBearingSensor {
     return j;
   }
 
+  /// Second derivatives of h with respect to the pose (spec §3.3), with dx = x - m1, dy = y - m2:
+  ///   d2r (x,y block) = [[dy^2, -dx dy], [-dx dy, dx^2]] / r^3
+  ///   d2b (x,y block) = [[2 dx dy, dy^2 - dx^2], [dy^2 - dx^2, -2 dx dy]] / r^4
+  /// Every heading entry is zero (r does not depend on beta, b is linear in it).
+  void hessian_pose(const Pose& x, const Landmark& m, Mat3& range_hessian,
+                    Mat3& bearing_hessian) const {
+    const double dx = x(0) - m(0), dy = x(1) - m(1);
+    const double r2 = dx * dx + dy * dy, r = std::sqrt(r2);
+    const double r3 = r2 * r, r4 = r2 * r2;
+    range_hessian.setZero();
+    range_hessian(0, 0) = dy * dy / r3;
+    range_hessian(0, 1) = range_hessian(1, 0) = -dx * dy / r3;
+    range_hessian(1, 1) = dx * dx / r3;
+    bearing_hessian.setZero();
+    bearing_hessian(0, 0) = 2.0 * dx * dy / r4;
+    bearing_hessian(0, 1) = bearing_hessian(1, 0) = (dy * dy - dx * dx) / r4;
+    bearing_hessian(1, 1) = -2.0 * dx * dy / r4;
+  }
+
   /// J_h_m (2x2) = minus the position part of J_h_x.
   Mat2 jacobian_landmark(const Pose& x, const Landmark& m) const {
     return -jacobian_pose(x, m).leftCols<2>();

@@ -1,0 +1,110 @@
+#pragma once
+// The plain-text robot log: what a localization (or SLAM) run consumes, for any dataset.
+//
+// One record per line, fields separated by spaces or tabs, '#' starts a comment. Times in seconds,
+// lengths in metres, angles in radians. Full description: docs/formats.md, "Plain-text log format".
+//
+//   # implicit robot log v1
+//   landmark 1 2.8953 -4.0353                 # id east north (known map / ground-truth map)
+//   initial 45.047 4.734 4.138 4.098 0.1 0.1 0.02   # t x y heading, then std devs of the prior
+//   control 45.049 2.0435 0.2764              # t u1 u2: the motion model's control for the
+//                                             # step that ends at t (Ute: axle speed vc, steering)
+//   scan 45.103 2                             # t n: an observation set with n observations,
+//   obs 7.301 1.2312                          #   then n lines: range bearing [landmark id]
+//   obs 12.05 2.0100 4
+//   truth 45.047 5.1048 4.2044 [heading]      # t x y [heading]: ground truth (GPS, simulation)
+//
+// Records of one kind must have strictly increasing times (scans and truth too); the kinds may
+// be interleaved in any order. A landmark id used by an `obs` line must be defined by a `landmark`
+// line (anywhere in the file). Readers reject malformed input with a ParseError naming the file,
+// the line and the field ("log.txt:12: field 'bearing': expected a finite number, got 'nan'").
+//
+//   RobotLog log = read_robot_log("run.log");
+//   write_robot_log("copy.log", log);        // round-trips exactly (17 significant digits)
+
+#include <filesystem>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "implicit/core/types.hpp"
+#include "implicit/robot/landmark_map.hpp"
+#include "implicit/robot/range_bearing.hpp"
+#include "implicit/robot/ute_model.hpp"
+
+namespace implicit::robot {
+
+struct Observation {
+  Measurement z;         ///< (range [m], bearing [rad])
+  int landmark_id = -1;  ///< known id (labelled data), or -1 (unlabelled: associate)
+};
+
+struct TimedControl {
+  double time = 0.0;  ///< end of the step this control drives
+  Control u;
+};
+
+struct ObservationSet {
+  double time = 0.0;
+  std::vector<Observation> observations;  ///< may be empty (a scan that saw nothing)
+};
+
+struct TruthRecord {
+  double time = 0.0;
+  Vec<2> position;
+  std::optional<double> heading;  ///< absent when the source has no heading (e.g. GPS at rest)
+};
+
+struct PosePrior {
+  double time = 0.0;
+  Pose mean;
+  Vec<3> std;  ///< standard deviations of x, y, heading
+};
+
+struct RobotLog {
+  LandmarkMap landmarks;
+  std::optional<PosePrior> initial;
+  std::vector<TimedControl> controls;
+  std::vector<ObservationSet> scans;
+  std::vector<TruthRecord> truth;
+};
+
+/// Parses a log from a stream; `name` is used in error messages.
+RobotLog parse_robot_log(std::istream& in, const std::string& name);
+RobotLog read_robot_log(const std::filesystem::path& path);
+void write_robot_log(std::ostream& out, const RobotLog& log);
+void write_robot_log(const std::filesystem::path& path, const RobotLog& log);
+
+// ---- From a log to filter steps ------------------------------------------------------------
+
+/// One motion step of a filter: the control, and the observation set applied after it (if any).
+struct FilterStep {
+  double time = 0.0;
+  Control u;
+  int scan = -1;  ///< index into RobotLog::scans, or -1 (prediction only)
+};
+
+struct StepSchedule {
+  std::vector<FilterStep> steps;
+  int scans_used = 0;               ///< scans attached to a step
+  int scans_with_observations = 0;  ///< attached scans with at least one observation
+  int scans_skipped = 0;            ///< scans farther than max_offset from every step
+  int observations_used = 0;        ///< observations in the attached scans
+};
+
+/// The steps of a run: every control with time >= start_time (minus a 1e-9 s tolerance) is one
+/// step; each scan is attached to the step nearest in time if that is within max_offset seconds
+/// (use half the step length), otherwise skipped. Two scans on one step: the later one is skipped.
+StepSchedule make_schedule(const RobotLog& log, double start_time, double max_offset);
+
+/// Ground truth at each step time, interpolated linearly between truth records; NaN outside
+/// their time range. Heading is interpolated along the shorter arc and is NaN where either
+/// neighbour has no heading.
+struct TruthTrack {
+  std::vector<Vec<2>> position;
+  std::vector<double> heading;
+};
+TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule);
+
+}  // namespace implicit::robot
