@@ -1,0 +1,273 @@
+#pragma once
+// The functions F that implicit SLAM minimises and samples around (spec §3.3, §3.5, §3.7).
+//
+// PoseObjective (3-D, known landmarks): for one particle with predicted pose f, process noise
+// Sigma1 and landmark terms (m_i, z_i, S_i),
+//   F(x) = 1/2 |x - f|^2_{Sigma1^-1} + sum_i 1/2 e_i^T S_i^-1 e_i,   e_i = (r_i - z_r, wrap(b_i -
+//   z_b))
+// plus constant() = 1/2 log det(2 pi Sigma1) + sum_i 1/2 log det(2 pi S_i), which the weights keep.
+// Implicit SLAM (A) uses S_i = Sigma2 and the particle's point landmark: this is implicit MCL.
+// Implicit SLAM (B) uses S_i = H_m P_i H_m^T + Sigma2 frozen at (f, m_i).
+//
+// NewLandmarkObjective (5-D, a new landmark in (A)): F(x, theta) = 1/2|x - f|^2_{Sigma1^-1}
+// + 1/2 e(x, theta)^T Sigma2^-1 e(x, theta) with a flat prior on theta. Its minimiser is closed
+// form, mu = (f, g(f, z)) with F(mu) = 0, and H = blockdiag(Sigma1^-1, 0) + J^T Sigma2^-1 J.
+//
+//   PoseObjective F(f, sigma1, terms);
+//   PoseLaplace lp = minimize_pose_objective(F, f, 20, 1e-9);   // never throws
+//   Pose x = lp.mu + lp.L.transpose().triangularView<Eigen::Upper>().solve(xi);
+//   double log_w = 1.5 * kLog2Pi - lp.log_det_L + 0.5 * xi.squaredNorm() - F.value(x) -
+//   F.constant();
+//
+// Mistakes to avoid: dropping constant() or log_det_L from the weight (they differ between
+// particles, spec E23/E24); differentiating at range 0 (value() returns +inf there, and the
+// line search treats it as a failed step).
+
+#include <cmath>
+#include <limits>
+#include <span>
+
+#include <Eigen/Cholesky>
+
+#include "implicit/core/types.hpp"
+#include "implicit/core/weights.hpp"
+#include "implicit/robot/range_bearing.hpp"
+
+namespace implicit::slam {
+
+/// 1/2 e^T S^-1 e for one landmark, S given by its Cholesky factor.
+struct LandmarkTerm {
+  Vec<2> landmark = Vec<2>::Zero();
+  Vec<2> z = Vec<2>::Zero();
+  Eigen::LLT<Mat<2>> s_llt;
+  double half_log_det_2pi_s = 0.0;  ///< 1/2 log det(2 pi S)
+
+  /// Factorises S; returns false when S is not positive definite.
+  bool set(const Vec<2>& m, const Vec<2>& measurement, const Mat<2>& s) {
+    landmark = m;
+    z = measurement;
+    s_llt.compute(s);
+    if (s_llt.info() != Eigen::Success) return false;
+    const Mat<2> l = s_llt.matrixL();
+    half_log_det_2pi_s = kLog2Pi + std::log(l(0, 0)) + std::log(l(1, 1));
+    return std::isfinite(half_log_det_2pi_s);
+  }
+};
+
+class PoseObjective {
+ public:
+  /// `sigma1` must be SPD (check ok()). `terms` must outlive the objective.
+  PoseObjective(const Vec<3>& f, const Mat<3>& sigma1, std::span<const LandmarkTerm> terms)
+      : f_(f), terms_(terms), llt1_(sigma1) {
+    ok_ = llt1_.info() == Eigen::Success;
+    if (!ok_) return;
+    precision_ = llt1_.solve(Mat<3>::Identity());
+    precision_ = 0.5 * (precision_ + precision_.transpose()).eval();
+    const Mat<3> l = llt1_.matrixL();
+    constant_ = 1.5 * kLog2Pi + l.diagonal().array().log().sum();
+    for (const auto& t : terms_) constant_ += t.half_log_det_2pi_s;
+  }
+
+  bool ok() const { return ok_ && std::isfinite(constant_); }
+  const Vec<3>& prior_mean() const { return f_; }
+  const Mat<3>& prior_precision() const { return precision_; }
+  /// 1/2 log det(2 pi Sigma1) + sum_i 1/2 log det(2 pi S_i).
+  double constant() const { return constant_; }
+
+  /// F(x) without constant(); +inf when not finite (e.g. x on a landmark).
+  double value(const Vec<3>& x) const {
+    const Vec<3> d = x - f_;
+    double v = 0.5 * d.dot(precision_ * d);
+    for (const auto& t : terms_) {
+      const double dx = x(0) - t.landmark(0), dy = x(1) - t.landmark(1);
+      const double r = std::sqrt(dx * dx + dy * dy);
+      const Vec<2> e(r - t.z(0), wrap_angle(std::atan2(-dy, -dx) - x(2) + kPi / 2.0 - t.z(1)));
+      v += 0.5 * e.dot(t.s_llt.solve(e));
+    }
+    return std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
+  }
+
+  /// F(x), its gradient, exact Hessian and Gauss-Newton Hessian (exact minus residual terms).
+  double evaluate(const Vec<3>& x, Vec<3>& grad, Mat<3>& hess, Mat<3>& hess_gn) const {
+    const Vec<3> d = x - f_;
+    grad = precision_ * d;
+    double v = 0.5 * d.dot(grad);
+    hess_gn = precision_;
+    Mat<2> second = Mat<2>::Zero();  // residual-weighted second derivatives (x, y block)
+    for (const auto& t : terms_) {
+      const double dx = x(0) - t.landmark(0), dy = x(1) - t.landmark(1);
+      const double r2 = dx * dx + dy * dy, r = std::sqrt(r2);
+      const Vec<2> e(r - t.z(0), wrap_angle(std::atan2(-dy, -dx) - x(2) + kPi / 2.0 - t.z(1)));
+      Eigen::Matrix<double, 2, 3> j;
+      j << dx / r, dy / r, 0.0, -dy / r2, dx / r2, -1.0;
+      const Vec<2> w = t.s_llt.solve(e);
+      v += 0.5 * e.dot(w);
+      grad.noalias() += j.transpose() * w;
+      const Eigen::Matrix<double, 2, 3> sj = t.s_llt.solve(j);
+      hess_gn.noalias() += j.transpose() * sj;
+      const double r3 = r2 * r, r4 = r2 * r2;
+      second(0, 0) += w(0) * dy * dy / r3 + w(1) * 2.0 * dx * dy / r4;
+      second(0, 1) += -w(0) * dx * dy / r3 + w(1) * (dy * dy - dx * dx) / r4;
+      second(1, 1) += w(0) * dx * dx / r3 - w(1) * 2.0 * dx * dy / r4;
+    }
+    second(1, 0) = second(0, 1);
+    hess = hess_gn;
+    hess.topLeftCorner<2, 2>() += second;
+    return v;
+  }
+
+ private:
+  Vec<3> f_;
+  std::span<const LandmarkTerm> terms_;
+  Eigen::LLT<Mat<3>> llt1_;
+  Mat<3> precision_ = Mat<3>::Zero();
+  double constant_ = 0.0;
+  bool ok_ = false;
+};
+
+/// The Gaussian approximation that the 3-D linear map samples from, and how it was found.
+struct PoseLaplace {
+  Vec<3> mu = Vec<3>::Zero();
+  Mat<3> L = Mat<3>::Identity();  ///< lower Cholesky factor of the Hessian used for sampling
+  double log_det_L = 0.0;
+  int iterations = 0;
+  bool converged = false;
+  bool gauss_newton = false;  ///< the exact Hessian at mu was not SPD; Gauss-Newton was used
+  bool ok = false;            ///< false: no finite SPD approximation (weight the particle zero)
+};
+
+/// Damped Newton (exact Hessian, Gauss-Newton when it is not SPD, Armijo backtracking where a
+/// non-finite F is a failed step), then the Cholesky factor at the end point. Never throws. Any
+/// centre and any SPD Hessian give exact weights, so a loose tolerance only costs efficiency.
+inline PoseLaplace minimize_pose_objective(const PoseObjective& F, const Vec<3>& x0,
+                                           int max_iterations, double step_tolerance) {
+  PoseLaplace out;
+  if (!F.ok()) return out;
+  Vec<3> x = x0, g;
+  Mat<3> h, hgn;
+  double v = F.evaluate(x, g, h, hgn);
+  if (!std::isfinite(v)) return out;
+  for (int it = 0; it < max_iterations; ++it) {
+    ++out.iterations;
+    Eigen::LLT<Mat<3>> llt(h);
+    if (llt.info() != Eigen::Success) llt.compute(hgn);
+    if (llt.info() != Eigen::Success) break;
+    const Vec<3> step = -llt.solve(g);
+    const double slope = g.dot(step);
+    double t = 1.0;
+    bool accepted = false;
+    for (int k = 0; k < 40; ++k, t *= 0.5) {
+      const double vn = F.value(x + t * step);
+      if (vn <= v + 1e-4 * t * slope) {
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) {
+      out.converged = step.cwiseAbs().maxCoeff() < 1e3 * step_tolerance;
+      break;
+    }
+    x += t * step;
+    v = F.evaluate(x, g, h, hgn);
+    if ((t * step).cwiseAbs().maxCoeff() < step_tolerance) {
+      out.converged = true;
+      break;
+    }
+  }
+  out.mu = x;
+  Eigen::LLT<Mat<3>> llt(h);
+  if (llt.info() != Eigen::Success || !h.allFinite()) {
+    out.gauss_newton = true;
+    llt.compute(hgn);
+    if (llt.info() != Eigen::Success || !hgn.allFinite()) return out;
+  }
+  out.L = llt.matrixL();
+  out.log_det_L = out.L.diagonal().array().log().sum();
+  out.ok = std::isfinite(out.log_det_L) && x.allFinite();
+  return out;
+}
+
+/// The 5-D F of a new landmark in implicit SLAM (A), variables p = (x, y, beta, theta1, theta2).
+class NewLandmarkObjective {
+ public:
+  NewLandmarkObjective(const Vec<3>& f, const Mat<3>& sigma1, const Vec<2>& z, const Mat<2>& sigma2)
+      : f_(f), z_(z), llt1_(sigma1), llt2_(sigma2) {
+    ok_ = llt1_.info() == Eigen::Success && llt2_.info() == Eigen::Success;
+    if (!ok_) return;
+    precision1_ = llt1_.solve(Mat<3>::Identity());
+    precision1_ = 0.5 * (precision1_ + precision1_.transpose()).eval();
+    const Mat<3> l1 = llt1_.matrixL();
+    const Mat<2> l2 = llt2_.matrixL();
+    constant_ = 1.5 * kLog2Pi + l1.diagonal().array().log().sum() + kLog2Pi +
+                l2.diagonal().array().log().sum();
+  }
+  bool ok() const { return ok_; }
+  /// 1/2 log det(2 pi Sigma1) + 1/2 log det(2 pi Sigma2).
+  double constant() const { return constant_; }
+
+  /// The closed-form minimiser (f, g(f, z)); F there is 0.
+  Vec<5> minimizer() const {
+    Vec<5> p;
+    p.head<3>() = f_;
+    p.tail<2>() = robot::RangeBearingSensor::inverse(f_, z_);
+    return p;
+  }
+
+  /// F(p) without constant(); optional gradient and exact Hessian. +inf when not finite.
+  double evaluate(const Vec<5>& p, Vec<5>* grad = nullptr, Mat<5>* hess = nullptr) const {
+    const Vec<3> d = p.head<3>() - f_;
+    const Vec<3> pd = precision1_ * d;
+    const double dx = p(0) - p(3), dy = p(1) - p(4);
+    const double r2 = dx * dx + dy * dy, r = std::sqrt(r2);
+    const Vec<2> e(r - z_(0), wrap_angle(std::atan2(-dy, -dx) - p(2) + kPi / 2.0 - z_(1)));
+    const Vec<2> w = llt2_.solve(e);
+    const double v = 0.5 * d.dot(pd) + 0.5 * e.dot(w);
+    if (!std::isfinite(v)) return std::numeric_limits<double>::infinity();
+    const Eigen::Matrix<double, 2, 5> j = jacobian(dx, dy, r2, r);
+    if (grad != nullptr) {
+      grad->setZero();
+      grad->head<3>() = pd;
+      *grad += j.transpose() * w;
+    }
+    if (hess != nullptr) {
+      hess->setZero();
+      hess->topLeftCorner<3, 3>() = precision1_;
+      *hess += j.transpose() * llt2_.solve(j);
+      const double r3 = r2 * r, r4 = r2 * r2;
+      Mat<2> k;  // sum_a w_a * (second derivative of e_a in (x, y)); theta block is +k, cross -k
+      k(0, 0) = w(0) * dy * dy / r3 + w(1) * 2.0 * dx * dy / r4;
+      k(0, 1) = -w(0) * dx * dy / r3 + w(1) * (dy * dy - dx * dx) / r4;
+      k(1, 1) = w(0) * dx * dx / r3 - w(1) * 2.0 * dx * dy / r4;
+      k(1, 0) = k(0, 1);
+      hess->block<2, 2>(0, 0) += k;
+      hess->block<2, 2>(3, 3) += k;
+      hess->block<2, 2>(0, 3) -= k;
+      hess->block<2, 2>(3, 0) -= k;
+    }
+    return v;
+  }
+
+  /// H at the minimiser: blockdiag(Sigma1^-1, 0) + J^T Sigma2^-1 J (the residual is zero there).
+  Mat<5> hessian_at_minimizer() const {
+    Mat<5> h;
+    evaluate(minimizer(), nullptr, &h);
+    return h;
+  }
+
+ private:
+  static Eigen::Matrix<double, 2, 5> jacobian(double dx, double dy, double r2, double r) {
+    Eigen::Matrix<double, 2, 5> j;
+    j << dx / r, dy / r, 0.0, -dx / r, -dy / r,  //
+        -dy / r2, dx / r2, -1.0, dy / r2, -dx / r2;
+    return j;
+  }
+  Vec<3> f_;
+  Vec<2> z_;
+  Eigen::LLT<Mat<3>> llt1_;
+  Eigen::LLT<Mat<2>> llt2_;
+  Mat<3> precision1_ = Mat<3>::Zero();
+  double constant_ = 0.0;
+  bool ok_ = false;
+};
+
+}  // namespace implicit::slam

@@ -1,0 +1,483 @@
+// SLAM data sets: synthetic generation (spec §3.6), reference CSV files, the plain-text log.
+#include "implicit/slam/dataset.hpp"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <Eigen/Cholesky>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/rng.hpp"
+#include "implicit/core/weights.hpp"
+
+namespace implicit::slam {
+namespace {
+
+std::vector<std::string> split(const std::string& line, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : line) {
+    if (c == sep) {
+      out.push_back(cur);
+      cur.clear();
+    } else if (c != '\r') {
+      cur.push_back(c);
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+std::vector<std::string> split_ws(const std::string& line) {
+  std::vector<std::string> out;
+  std::istringstream is(line);
+  std::string tok;
+  while (is >> tok) out.push_back(tok);
+  return out;
+}
+
+double to_double(const std::string& s, const std::filesystem::path& file, std::size_t line,
+                 const std::string& field) {
+  if (s == "nan" || s == "NaN") return std::numeric_limits<double>::quiet_NaN();
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  if (s.empty() || end != s.c_str() + s.size())
+    throw ParseError(fmt::format("{}:{}: field '{}': expected a number, got '{}'", file.string(),
+                                 line, field, s));
+  return v;
+}
+
+long to_int(const std::string& s, const std::filesystem::path& file, std::size_t line,
+            const std::string& field) {
+  long v = 0;
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (r.ec != std::errc() || r.ptr != s.data() + s.size())
+    throw ParseError(fmt::format("{}:{}: field '{}': expected an integer, got '{}'", file.string(),
+                                 line, field, s));
+  return v;
+}
+
+std::size_t column(const std::vector<std::string>& header, const std::string& name,
+                   const std::filesystem::path& file) {
+  const auto it = std::find(header.begin(), header.end(), name);
+  if (it == header.end())
+    throw ParseError(
+        fmt::format("{}:1: expected a column '{}' in the header", file.string(), name));
+  return static_cast<std::size_t>(it - header.begin());
+}
+
+Measurement observe(const robot::RangeBearingSensor& s, const Pose& x, const Landmark& m) {
+  Measurement h = s.predict(x, m);
+  h(1) = wrap_angle(h(1));
+  return h;
+}
+
+}  // namespace
+
+void SlamDataset::validate() const {
+  require(offsets.size() == controls.size() + 1,
+          "SLAM data set '{}': expected {} step offsets, got {}", name, controls.size() + 1,
+          offsets.size());
+  require(initial_pose.allFinite(), "SLAM data set '{}': expected a finite initial pose", name);
+  for (std::size_t n = 1; n <= steps(); ++n) {
+    const Control& u = control(n);
+    require(u.allFinite(), "SLAM data set '{}', step {}: expected a finite control, got ({}, {})",
+            name, n, u(0), u(1));
+    for (const Observation& o : observations(n)) {
+      require(o.z.allFinite(),
+              "SLAM data set '{}', step {}: expected a finite observation, got (range {}, "
+              "bearing {})",
+              name, n, o.z(0), o.z(1));
+      require(o.z(0) > 0.0, "SLAM data set '{}', step {}: expected a positive range, got {}", name,
+              n, o.z(0));
+      require(o.landmark < static_cast<int>(landmarks.size()) || landmarks.empty(),
+              "SLAM data set '{}', step {}: expected a landmark id below {}, got {}", name, n,
+              landmarks.size(), o.landmark);
+    }
+  }
+  require(truth.empty() || truth.size() == controls.size() + 1,
+          "SLAM data set '{}': expected {} truth rows, got {}", name, controls.size() + 1,
+          truth.size());
+}
+
+std::vector<Pose> integrate_controls(const robot::UteModel& model, const Pose& x0,
+                                     std::span<const Control> controls) {
+  std::vector<Pose> x(controls.size() + 1);
+  x[0] = x0;
+  for (std::size_t n = 0; n < controls.size(); ++n) x[n + 1] = model.predict(x[n], controls[n]);
+  return x;
+}
+
+SlamDataset generate_synthetic(const SlamScenario& sc, const SyntheticConfig& cfg,
+                               std::uint64_t seed) {
+  require(cfg.laser_every >= 1, "synthetic SLAM data: expected laser_every >= 1, got {}",
+          cfg.laser_every);
+  require(cfg.max_range > 0, "synthetic SLAM data: expected max_range > 0, got {}", cfg.max_range);
+  require(!sc.controls.empty(), "synthetic SLAM data: expected controls, got none");
+  SlamDataset d;
+  d.name =
+      fmt::format("{}_{}_le{}_seed{}", sc.name,
+                  cfg.truth == TruthMode::kPaper ? "paper" : "consistent", cfg.laser_every, seed);
+  d.vehicle = sc.vehicle;
+  d.initial_pose = sc.initial_pose;
+  d.landmarks = sc.landmarks;
+  robot::UteParams motion = cfg.motion;
+  motion.dt = sc.vehicle.dt;
+  motion.wheelbase = sc.vehicle.wheelbase;
+  motion.encoder_offset = sc.vehicle.encoder_offset;
+  motion.laser_forward = sc.vehicle.laser_forward;
+  motion.laser_left = sc.vehicle.laser_left;
+  const robot::UteModel model(motion);
+  const Mat<2> sqrt_r = cfg.sensor.noise_covariance().cwiseSqrt();
+
+  d.truth.resize(sc.controls.size() + 1);
+  d.truth[0] = sc.initial_pose;
+  SlamDatasetBuilder b(d);
+  std::vector<int> visible;
+  visible.reserve(sc.landmarks.size());
+  for (std::size_t n = 1; n <= sc.controls.size(); ++n) {
+    const Control& u = sc.controls[n - 1];
+    b.begin_step(u);
+    const Pose& prev = d.truth[n - 1];
+    if (cfg.truth == TruthMode::kPaper) {
+      d.truth[n] = model.predict(prev, u);
+    } else {
+      Rng rng({seed, n, 1, purpose::kData});
+      const Eigen::LLT<Mat<3>> llt(model.process_covariance(prev, u));
+      d.truth[n] = model.predict(prev, u) + llt.matrixL() * rng.normal_vector<3>();
+    }
+    if (n % static_cast<std::size_t>(cfg.laser_every) != 0) continue;
+    visible.clear();
+    for (std::size_t k = 0; k < sc.landmarks.size(); ++k) {
+      const Measurement h = observe(cfg.sensor, d.truth[n], sc.landmarks[k]);
+      if (h(0) <= cfg.max_range && h(0) >= cfg.min_range && h(1) >= 0.0 && h(1) <= kPi)
+        visible.push_back(static_cast<int>(k));
+    }
+    if (visible.empty()) continue;
+    Rng rng({seed, n, 0, purpose::kData});
+    const auto pick =
+        std::min(visible.size() - 1, static_cast<std::size_t>(rng.uniform() * visible.size()));
+    const int id = visible[pick];
+    Observation o;
+    o.landmark = id;
+    o.z = observe(cfg.sensor, d.truth[n], sc.landmarks[static_cast<std::size_t>(id)]) +
+          sqrt_r * rng.normal_vector<2>();
+    b.add_observation(o);
+  }
+  return d;
+}
+
+SlamScenario make_dense_scenario(const SlamScenario& base, int laps, int landmarks,
+                                 std::uint64_t seed) {
+  require(laps >= 1, "dense SLAM scenario: expected laps >= 1, got {}", laps);
+  require(landmarks >= 1, "dense SLAM scenario: expected landmarks >= 1, got {}", landmarks);
+  SlamScenario s = base;
+  s.name = fmt::format("dense{}x{}", landmarks, laps);
+  s.controls.clear();
+  for (int l = 0; l < laps; ++l)
+    s.controls.insert(s.controls.end(), base.controls.begin(), base.controls.end());
+  const robot::UteModel model(s.vehicle);
+  const auto path = integrate_controls(model, s.initial_pose, s.controls);
+  s.landmarks.resize(static_cast<std::size_t>(landmarks));
+  for (int i = 0; i < landmarks; ++i) {
+    Rng rng({seed, static_cast<std::uint64_t>(i), 2, purpose::kData});
+    const auto at =
+        static_cast<std::size_t>((i + 0.5) * static_cast<double>(path.size() - 1) / landmarks);
+    const Pose& p = path[at];
+    const double side = rng.uniform() < 0.5 ? -1.0 : 1.0;
+    const double lateral = side * (3.0 + 9.0 * rng.uniform());
+    const double along = 4.0 * (rng.uniform() - 0.5);
+    const double c = std::cos(p(2)), sn = std::sin(p(2));
+    s.landmarks[static_cast<std::size_t>(i)] =
+        Landmark(p(0) + along * c - lateral * sn, p(1) + along * sn + lateral * c);
+  }
+  return s;
+}
+
+std::filesystem::path default_data_dir() {
+  if (const char* env = std::getenv("IMPLICIT_DATA_DIR"); env != nullptr && *env != '\0')
+    return env;
+#ifdef IMPLICIT_SOURCE_DIR
+  return std::filesystem::path(IMPLICIT_SOURCE_DIR) / "data";
+#else
+  return "data";
+#endif
+}
+
+std::vector<std::string> read_text_lines(const std::filesystem::path& path) {
+  gzFile f = gzopen(path.string().c_str(), "rb");
+  if (f == nullptr)
+    throw ParseError(fmt::format("{}: expected a readable file, got none", path.string()));
+  std::vector<std::string> lines;
+  std::string cur;
+  char buf[1 << 16];
+  int got = 0;
+  while ((got = gzread(f, buf, sizeof(buf))) > 0) {
+    for (int i = 0; i < got; ++i) {
+      if (buf[i] == '\n') {
+        if (!cur.empty() && cur.back() == '\r') cur.pop_back();
+        lines.push_back(std::move(cur));
+        cur.clear();
+      } else {
+        cur.push_back(buf[i]);
+      }
+    }
+  }
+  int err = 0;
+  const char* msg = gzerror(f, &err);
+  const bool failed = got < 0 || (err != Z_OK && err != Z_STREAM_END);
+  const std::string what = failed ? std::string(msg) : std::string();
+  gzclose(f);
+  if (failed)
+    throw ParseError(fmt::format("{}: expected gzip or text, got: {}", path.string(), what));
+  if (!cur.empty()) lines.push_back(std::move(cur));
+  return lines;
+}
+
+SlamScenario load_carpark_scenario(const std::filesystem::path& data_dir) {
+  const auto dir = data_dir / "slam-synthetic";
+  SlamScenario s;
+  {
+    const auto file = dir / "carpark_controls.csv";
+    const auto lines = read_text_lines(file);
+    require(!lines.empty(), "{}: expected a header line, got an empty file", file.string());
+    const auto header = split(lines[0], ',');
+    const auto cvc = column(header, "vc", file), cal = column(header, "alpha", file);
+    for (std::size_t i = 1; i < lines.size(); ++i) {
+      if (lines[i].empty()) continue;
+      const auto f = split(lines[i], ',');
+      if (f.size() != header.size())
+        throw ParseError(fmt::format("{}:{}: expected {} fields, got {}", file.string(), i + 1,
+                                     header.size(), f.size()));
+      s.controls.emplace_back(to_double(f[cvc], file, i + 1, "vc"),
+                              to_double(f[cal], file, i + 1, "alpha"));
+    }
+  }
+  {
+    const auto file = dir / "landmarks.csv";
+    const auto lines = read_text_lines(file);
+    require(!lines.empty(), "{}: expected a header line, got an empty file", file.string());
+    const auto header = split(lines[0], ',');
+    const auto cx = column(header, "east_m", file), cy = column(header, "north_m", file);
+    for (std::size_t i = 1; i < lines.size(); ++i) {
+      if (lines[i].empty()) continue;
+      const auto f = split(lines[i], ',');
+      s.landmarks.emplace_back(to_double(f.at(cx), file, i + 1, "east_m"),
+                               to_double(f.at(cy), file, i + 1, "north_m"));
+    }
+  }
+  return s;
+}
+
+SlamDataset read_reference_csv(const std::filesystem::path& path,
+                               const std::vector<Landmark>& landmarks) {
+  const auto lines = read_text_lines(path);
+  require(lines.size() >= 2, "{}: expected a header and rows, got {} lines", path.string(),
+          lines.size());
+  const auto header = split(lines[0], ',');
+  const std::size_t c_vc = column(header, "vc", path), c_al = column(header, "alpha", path),
+                    c_x = column(header, "x_true", path), c_y = column(header, "y_true", path),
+                    c_b = column(header, "beta_true", path),
+                    c_has = column(header, "has_obs", path), c_zr = column(header, "z_r", path),
+                    c_zb = column(header, "z_b", path), c_id = column(header, "landmark", path);
+  SlamDataset d;
+  d.name = path.stem().stem().string();
+  d.landmarks = landmarks;
+  SlamDatasetBuilder b(d);
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    if (lines[i].empty()) continue;
+    const auto f = split(lines[i], ',');
+    if (f.size() != header.size())
+      throw ParseError(fmt::format("{}:{}: expected {} fields, got {}", path.string(), i + 1,
+                                   header.size(), f.size()));
+    const Pose x(to_double(f[c_x], path, i + 1, "x_true"), to_double(f[c_y], path, i + 1, "y_true"),
+                 to_double(f[c_b], path, i + 1, "beta_true"));
+    d.truth.push_back(x);
+    if (i == 1) {
+      d.initial_pose = x;
+      continue;
+    }
+    b.begin_step(
+        Control(to_double(f[c_vc], path, i + 1, "vc"), to_double(f[c_al], path, i + 1, "alpha")));
+    if (to_int(f[c_has], path, i + 1, "has_obs") != 0) {
+      Observation o;
+      o.z = Measurement(to_double(f[c_zr], path, i + 1, "z_r"),
+                        to_double(f[c_zb], path, i + 1, "z_b"));
+      o.landmark = static_cast<int>(to_int(f[c_id], path, i + 1, "landmark"));
+      b.add_observation(o);
+    }
+  }
+  d.validate();
+  return d;
+}
+
+std::vector<Pose> read_reference_trace(const std::filesystem::path& path) {
+  const auto lines = read_text_lines(path);
+  require(!lines.empty(), "{}: expected a header line, got an empty file", path.string());
+  const auto header = split(lines[0], ',');
+  const auto cx = column(header, "x_hat", path), cy = column(header, "y_hat", path),
+             cb = column(header, "beta_hat", path);
+  std::vector<Pose> out;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    if (lines[i].empty()) continue;
+    const auto f = split(lines[i], ',');
+    out.emplace_back(to_double(f.at(cx), path, i + 1, "x_hat"),
+                     to_double(f.at(cy), path, i + 1, "y_hat"),
+                     to_double(f.at(cb), path, i + 1, "beta_hat"));
+  }
+  return out;
+}
+
+// ---- plain-text SLAM log ------------------------------------------------------------------
+// One record per line, whitespace separated; '#' starts a comment. Records:
+//   vehicle <dt> <L> <H> <a> <b>          geometry (once, before any step)
+//   initial <x> <y> <beta>                initial pose (once)
+//   landmark <id> <east> <north>          true landmark (optional, ids 0..K-1 in order)
+//   u <n> <vc> <alpha>                    control of step n (n = 1, 2, ... consecutive)
+//   z <n> <range> <bearing> <id>          detection at step n (id -1 = unknown)
+//   truth <n> <x> <y> <beta|nan>          true pose (or position) after step n (optional)
+SlamDataset read_slam_log(const std::filesystem::path& path) {
+  const auto lines = read_text_lines(path);
+  SlamDataset d;
+  d.name = path.filename().string();
+  for (const char* ext : {".gz", ".txt", ".log"})
+    if (d.name.size() > std::strlen(ext) && d.name.ends_with(ext))
+      d.name.resize(d.name.size() - std::strlen(ext));
+  SlamDatasetBuilder b(d);
+  bool have_initial = false;
+  std::map<std::size_t, Pose> truth;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const std::size_t ln = i + 1;
+    std::string line = lines[i];
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    const auto f = split_ws(line);
+    if (f.empty()) continue;
+    const std::string& kind = f[0];
+    auto need = [&](std::size_t k) {
+      if (f.size() != k)
+        throw ParseError(fmt::format("{}:{}: record '{}': expected {} fields, got {}",
+                                     path.string(), ln, kind, k, f.size()));
+    };
+    if (kind == "vehicle") {
+      need(6);
+      d.vehicle.dt = to_double(f[1], path, ln, "dt");
+      d.vehicle.wheelbase = to_double(f[2], path, ln, "L");
+      d.vehicle.encoder_offset = to_double(f[3], path, ln, "H");
+      d.vehicle.laser_forward = to_double(f[4], path, ln, "a");
+      d.vehicle.laser_left = to_double(f[5], path, ln, "b");
+      d.vehicle.validate();
+    } else if (kind == "initial") {
+      need(4);
+      d.initial_pose = Pose(to_double(f[1], path, ln, "x"), to_double(f[2], path, ln, "y"),
+                            to_double(f[3], path, ln, "beta"));
+      have_initial = true;
+    } else if (kind == "landmark") {
+      need(4);
+      const long id = to_int(f[1], path, ln, "id");
+      if (id != static_cast<long>(d.landmarks.size()))
+        throw ParseError(fmt::format("{}:{}: landmark id: expected {}, got {}", path.string(), ln,
+                                     d.landmarks.size(), id));
+      d.landmarks.emplace_back(to_double(f[2], path, ln, "east"),
+                               to_double(f[3], path, ln, "north"));
+    } else if (kind == "u") {
+      need(4);
+      const long n = to_int(f[1], path, ln, "n");
+      if (n != static_cast<long>(d.steps() + 1))
+        throw ParseError(fmt::format("{}:{}: step number: expected {}, got {}", path.string(), ln,
+                                     d.steps() + 1, n));
+      b.begin_step(Control(to_double(f[2], path, ln, "vc"), to_double(f[3], path, ln, "alpha")));
+    } else if (kind == "z") {
+      need(5);
+      const long n = to_int(f[1], path, ln, "n");
+      if (n != static_cast<long>(d.steps()) || n == 0)
+        throw ParseError(fmt::format(
+            "{}:{}: detection step: expected the current step {} (after its 'u' record), got {}",
+            path.string(), ln, d.steps(), n));
+      Observation o;
+      o.z = Measurement(to_double(f[2], path, ln, "range"), to_double(f[3], path, ln, "bearing"));
+      o.landmark = static_cast<int>(to_int(f[4], path, ln, "id"));
+      if (!o.z.allFinite() || o.z(0) <= 0.0)
+        throw ParseError(fmt::format(
+            "{}:{}: detection: expected a finite positive range and finite bearing, got ({}, {})",
+            path.string(), ln, o.z(0), o.z(1)));
+      b.add_observation(o);
+    } else if (kind == "truth") {
+      need(5);
+      const long n = to_int(f[1], path, ln, "n");
+      if (n < 0)
+        throw ParseError(
+            fmt::format("{}:{}: truth step: expected n >= 0, got {}", path.string(), ln, n));
+      const Pose x(to_double(f[2], path, ln, "x"), to_double(f[3], path, ln, "y"),
+                   to_double(f[4], path, ln, "beta"));
+      if (!std::isfinite(x(2))) d.truth_has_heading = false;
+      truth[static_cast<std::size_t>(n)] = x;
+    } else {
+      throw ParseError(
+          fmt::format("{}:{}: expected a record vehicle|initial|landmark|u|z|truth, got '{}'",
+                      path.string(), ln, kind));
+    }
+  }
+  if (!have_initial)
+    throw ParseError(fmt::format("{}: expected an 'initial' record, got none", path.string()));
+  if (d.steps() == 0)
+    throw ParseError(fmt::format("{}: expected at least one 'u' record, got none", path.string()));
+  if (!truth.empty()) {
+    d.truth.assign(d.steps() + 1, Pose::Constant(std::numeric_limits<double>::quiet_NaN()));
+    d.truth_valid.assign(d.steps() + 1, 0);
+    for (const auto& [n, x] : truth) {
+      if (n > d.steps())
+        throw ParseError(fmt::format("{}: truth step: expected at most {}, got {}", path.string(),
+                                     d.steps(), n));
+      d.truth[n] = x;
+      d.truth_valid[n] = 1;
+    }
+  }
+  d.validate();
+  return d;
+}
+
+void write_slam_log(const SlamDataset& d, const std::filesystem::path& path) {
+  const bool gz = path.extension() == ".gz";
+  std::string out;
+  out += "# implicit plain-text SLAM log (see data/victoria_park/README.md for the format)\n";
+  out += fmt::format("vehicle {} {} {} {} {}\n", d.vehicle.dt, d.vehicle.wheelbase,
+                     d.vehicle.encoder_offset, d.vehicle.laser_forward, d.vehicle.laser_left);
+  out += fmt::format("initial {} {} {}\n", d.initial_pose(0), d.initial_pose(1), d.initial_pose(2));
+  for (std::size_t k = 0; k < d.landmarks.size(); ++k)
+    out += fmt::format("landmark {} {} {}\n", k, d.landmarks[k](0), d.landmarks[k](1));
+  for (std::size_t n = 1; n <= d.steps(); ++n) {
+    out += fmt::format("u {} {} {}\n", n, d.control(n)(0), d.control(n)(1));
+    for (const Observation& o : d.observations(n))
+      out += fmt::format("z {} {} {} {}\n", n, o.z(0), o.z(1), o.landmark);
+    if (d.has_truth(n)) {
+      const Pose& x = d.truth[n];
+      if (d.truth_has_heading)
+        out += fmt::format("truth {} {} {} {}\n", n, x(0), x(1), x(2));
+      else
+        out += fmt::format("truth {} {} {} nan\n", n, x(0), x(1));
+    }
+  }
+  if (gz) {
+    gzFile f = gzopen(path.string().c_str(), "wb9");
+    require(f != nullptr, "{}: expected a writable path", path.string());
+    const int wrote = gzwrite(f, out.data(), static_cast<unsigned>(out.size()));
+    gzclose(f);
+    require(wrote == static_cast<int>(out.size()), "{}: write failed", path.string());
+  } else {
+    std::ofstream os(path);
+    require(static_cast<bool>(os), "{}: expected a writable path", path.string());
+    os << out;
+  }
+}
+
+}  // namespace implicit::slam

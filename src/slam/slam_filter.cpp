@@ -1,0 +1,598 @@
+// EKF-SLAM, FastSLAM 1.0/2.0 and implicit SLAM (A)/(B) behind the SlamFilter interface.
+#include "implicit/slam/slam_filter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_set>
+
+#include <Eigen/Cholesky>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/parallel.hpp"
+#include "implicit/core/resampling.hpp"
+#include "implicit/core/rng.hpp"
+#include "implicit/core/weights.hpp"
+#include "implicit/slam/ekf_slam.hpp"
+#include "implicit/slam/landmark_map.hpp"
+#include "implicit/slam/proposals.hpp"
+
+namespace implicit::slam {
+
+using robot::RangeBearingSensor;
+
+std::string_view to_string(SlamMethod m) {
+  switch (m) {
+    case SlamMethod::kEkf:
+      return "ekf";
+    case SlamMethod::kFastSlam1:
+      return "fastslam1";
+    case SlamMethod::kFastSlam2:
+      return "fastslam2";
+    case SlamMethod::kImplicit:
+      return "implicit";
+    case SlamMethod::kImplicitRb:
+      return "implicit-rb";
+  }
+  return "unknown";
+}
+
+SlamMethod parse_slam_method(std::string_view name) {
+  for (SlamMethod m : {SlamMethod::kEkf, SlamMethod::kFastSlam1, SlamMethod::kFastSlam2,
+                       SlamMethod::kImplicit, SlamMethod::kImplicitRb})
+    if (to_string(m) == name) return m;
+  throw InvalidArgument(fmt::format(
+      "SLAM method: expected ekf|fastslam1|fastslam2|implicit|implicit-rb, got '{}'", name));
+}
+
+std::string_view to_string(Association a) { return a == Association::kKnown ? "known" : "ml"; }
+
+Association parse_association(std::string_view name) {
+  if (name == "known") return Association::kKnown;
+  if (name == "ml") return Association::kMaximumLikelihood;
+  throw InvalidArgument(fmt::format("SLAM association: expected known|ml, got '{}'", name));
+}
+
+void SlamOptions::validate() const {
+  require(particles >= 1, "SLAM options: expected particles >= 1, got {}", particles);
+  require(gate_chi2 > 0 && std::isfinite(gate_chi2),
+          "SLAM options: expected a positive gate_chi2, got {}", gate_chi2);
+  require(new_landmark_density > 0 && std::isfinite(new_landmark_density),
+          "SLAM options: expected a positive new_landmark_density, got {}", new_landmark_density);
+  require(resample_threshold >= 0 && resample_threshold <= 1,
+          "SLAM options: expected resample_threshold in [0, 1], got {}", resample_threshold);
+  require(min_range >= 0 && std::isfinite(min_range),
+          "SLAM options: expected min_range >= 0, got {}", min_range);
+  require(newton_max_iterations >= 1, "SLAM options: expected newton_max_iterations >= 1, got {}",
+          newton_max_iterations);
+  motion.validate();
+}
+
+namespace {
+
+void check_observation(std::uint64_t n, const Observation& o) {
+  require(std::isfinite(o.z(0)) && std::isfinite(o.z(1)),
+          "SLAM step {}: expected a finite observation, got (range {}, bearing {})", n, o.z(0),
+          o.z(1));
+  require(o.z(0) > 0.0, "SLAM step {}: expected a positive range, got {}", n, o.z(0));
+}
+
+Mat23 inverse_jacobian_pose(const Pose& x, const Measurement& z) {
+  const double angle = x(2) + z(1) - kPi / 2.0;
+  Mat23 g;
+  g << 1.0, 0.0, -z(0) * std::sin(angle), 0.0, 1.0, z(0) * std::cos(angle);
+  return g;
+}
+
+double log_normal2(const Vec<2>& e, const Eigen::LLT<Mat<2>>& llt) {
+  const Mat<2> l = llt.matrixL();
+  return -kLog2Pi - std::log(l(0, 0)) - std::log(l(1, 1)) - 0.5 * e.dot(llt.solve(e));
+}
+
+// ------------------------------------------------------------------------------------------
+class EkfSlamFilter final : public SlamFilter {
+ public:
+  EkfSlamFilter(const SlamOptions& opt, const Pose& x0)
+      : opt_(opt), model_(opt.motion), core_(x0, Mat<3>::Zero()) {}
+
+  void set_known_map(std::span<const Landmark> landmarks) override {
+    require(core_.landmark_count() == 0 && stats_.steps == 0,
+            "EKF-SLAM: set_known_map must be called before the first step");
+    for (std::size_t k = 0; k < landmarks.size(); ++k) {
+      core_.augment(landmarks[k], Mat23::Zero(), Mat<2>::Zero());
+      id_of_slot_.push_back(static_cast<int>(k));
+      slot_of_id_.push_back(static_cast<int>(k));
+    }
+  }
+
+  void step(std::uint64_t n, const Control& u, std::span<const Observation> obs) override {
+    require(u.allFinite(), "SLAM step {}: expected a finite control, got ({}, {})", n, u(0), u(1));
+    for (const auto& o : obs) check_observation(n, o);
+    const Pose x = core_.pose();
+    core_.predict(model_.predict(x, u), model_.jacobian_state(x, u),
+                  model_.process_covariance(x, u));
+    ++stats_.steps;
+    const RangeBearingSensor& s = opt_.sensor;
+    const Mat<2>& r = s.noise_covariance();
+    for (const Observation& o : obs) {
+      if (o.z(0) < opt_.min_range) {
+        ++stats_.skipped;
+        continue;
+      }
+      const Pose xp = core_.pose();
+      int slot = -1;
+      if (opt_.association == Association::kKnown) {
+        require(o.landmark >= 0, "SLAM step {}: known association needs a landmark id, got {}", n,
+                o.landmark);
+        const auto id = static_cast<std::size_t>(o.landmark);
+        if (id < slot_of_id_.size()) slot = slot_of_id_[id];
+      } else {
+        double best = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < core_.landmark_count(); ++k) {
+          const Landmark m = core_.landmark(k);
+          const Measurement e = RangeBearingSensor::residual(s.predict(xp, m), o.z);
+          const Eigen::LLT<Mat<2>> llt(core_.innovation_covariance(k, s.jacobian_pose(xp, m),
+                                                                   s.jacobian_landmark(xp, m), r));
+          if (llt.info() != Eigen::Success) continue;
+          const double d2 = e.dot(llt.solve(e));
+          if (d2 > opt_.gate_chi2) continue;
+          const Mat<2> l = llt.matrixL();
+          const double cost = d2 + 2.0 * (std::log(l(0, 0)) + std::log(l(1, 1)));
+          if (cost < best) {
+            best = cost;
+            slot = k;
+          }
+        }
+      }
+      if (slot < 0) {
+        const Landmark m = RangeBearingSensor::inverse(xp, o.z);
+        const Mat<2> gz = RangeBearingSensor::inverse_jacobian_measurement(xp, o.z);
+        slot = core_.augment(m, inverse_jacobian_pose(xp, o.z), gz * r * gz.transpose());
+        id_of_slot_.push_back(o.landmark);
+        if (opt_.association == Association::kKnown) {
+          const auto id = static_cast<std::size_t>(o.landmark);
+          if (slot_of_id_.size() <= id) slot_of_id_.resize(id + 1, -1);
+          slot_of_id_[id] = slot;
+        }
+        ++stats_.new_landmarks;
+        continue;
+      }
+      const Landmark m = core_.landmark(slot);
+      const Measurement nu = -RangeBearingSensor::residual(s.predict(xp, m), o.z);
+      if (core_.update(slot, nu, s.jacobian_pose(xp, m), s.jacobian_landmark(xp, m), r))
+        ++stats_.updates;
+      else
+        ++stats_.skipped;
+    }
+  }
+
+  PoseEstimate pose() const override { return {core_.pose(), core_.pose_covariance()}; }
+  MapEstimate map() const override {
+    MapEstimate m;
+    for (int k = 0; k < core_.landmark_count(); ++k) {
+      m.landmarks.push_back(core_.landmark(k));
+      m.ids.push_back(id_of_slot_[static_cast<std::size_t>(k)]);
+    }
+    return m;
+  }
+  const SlamStats& stats() const override { return stats_; }
+  std::size_t map_bytes() const override {
+    const auto n = static_cast<std::size_t>(core_.mean().size());
+    return sizeof(double) * (n + n * n);
+  }
+  const EkfSlamCore& core() const { return core_; }
+
+ private:
+  SlamOptions opt_;
+  robot::UteModel model_;
+  EkfSlamCore core_;
+  std::vector<int> slot_of_id_, id_of_slot_;
+  SlamStats stats_;
+};
+
+// ------------------------------------------------------------------------------------------
+struct Particle {
+  Pose x = Pose::Zero();
+  LandmarkMap map;
+  double log_w = 0.0;
+};
+
+struct KnownObservation {
+  std::size_t slot = 0;
+  Measurement z = Measurement::Zero();
+  LandmarkEstimate landmark;
+};
+
+struct ParticleOutcome {
+  int newton_iterations = 0;
+  int newton_solves = 0;
+  int newton_not_converged = 0;
+  int new_landmarks = 0;
+  int updates = 0;
+};
+
+class ParticleSlamFilter final : public SlamFilter {
+ public:
+  ParticleSlamFilter(const SlamOptions& opt, const Pose& x0)
+      : opt_(opt), model_(opt.motion), m_(static_cast<std::size_t>(opt.particles)) {
+    particles_.resize(m_);
+    for (auto& p : particles_) p.x = x0;
+    next_.resize(m_);
+    log_w_.assign(m_, 0.0);
+    w_.assign(m_, 1.0 / static_cast<double>(m_));
+    outcome_.resize(m_);
+    estimate_.mean = x0;
+  }
+
+  void set_known_map(std::span<const Landmark> landmarks) override {
+    require(stats_.steps == 0 && particles_[0].map.empty(),
+            "particle SLAM: set_known_map must be called before the first step");
+    LandmarkMap map;
+    for (std::size_t k = 0; k < landmarks.size(); ++k) {
+      map.push_back({landmarks[k], Mat<2>::Zero()});
+      slot_of_id_.push_back(static_cast<int>(k));
+      id_of_slot_.push_back(static_cast<int>(k));
+    }
+    for (auto& p : particles_) p.map = map;
+  }
+
+  void step(std::uint64_t n, const Control& u, std::span<const Observation> obs) override {
+    require(u.allFinite(), "SLAM step {}: expected a finite control, got ({}, {})", n, u(0), u(1));
+    for (const auto& o : obs) check_observation(n, o);
+    ++stats_.steps;
+    // Known association: "new or known" is decided once for all particles (they share slots).
+    slots_.assign(obs.size(), -1);
+    use_.assign(obs.size(), 1);
+    const std::size_t slots_before = id_of_slot_.size();
+    for (std::size_t i = 0; i < obs.size(); ++i) {
+      if (obs[i].z(0) < opt_.min_range) {
+        use_[i] = 0;
+        ++stats_.skipped;
+        continue;
+      }
+      if (opt_.association != Association::kKnown) continue;
+      require(obs[i].landmark >= 0, "SLAM step {}: known association needs a landmark id, got {}",
+              n, obs[i].landmark);
+      const auto id = static_cast<std::size_t>(obs[i].landmark);
+      if (slot_of_id_.size() <= id) slot_of_id_.resize(id + 1, -1);
+      if (slot_of_id_[id] < 0) {
+        slot_of_id_[id] = static_cast<int>(id_of_slot_.size());
+        id_of_slot_.push_back(obs[i].landmark);
+        slots_[i] = slot_of_id_[id];
+      } else if (static_cast<std::size_t>(slot_of_id_[id]) < slots_before) {
+        slots_[i] = slot_of_id_[id];
+      } else {
+        use_[i] = 0;  // a second detection of a landmark created in this same step
+        ++stats_.skipped;
+      }
+    }
+    const bool weighted = std::any_of(use_.begin(), use_.end(), [](int v) { return v != 0; });
+    parallel_for(
+        m_, [&](std::size_t j) { step_particle(j, n, u, obs, slots_before); }, 8);
+    for (const auto& oc : outcome_) {
+      stats_.newton_iterations += static_cast<std::size_t>(oc.newton_iterations);
+      stats_.newton_solves += static_cast<std::size_t>(oc.newton_solves);
+      stats_.newton_not_converged += static_cast<std::size_t>(oc.newton_not_converged);
+    }
+    if (opt_.association == Association::kKnown) {
+      for (std::size_t i = 0; i < obs.size(); ++i)
+        if (use_[i] != 0) {
+          if (static_cast<std::size_t>(slots_[i]) >= slots_before)
+            ++stats_.new_landmarks;
+          else
+            ++stats_.updates;
+        }
+    }
+    // Weights: normalise in the log domain, estimate, resample.
+    for (std::size_t j = 0; j < m_; ++j) log_w_[j] = particles_[j].log_w;
+    const WeightSummary ws = normalize_log_weights(log_w_, w_);
+    if (ws.all_zero) ++stats_.degenerate_steps;
+    for (std::size_t j = 0; j < m_; ++j) particles_[j].log_w = ws.all_zero ? 0.0 : std::log(w_[j]);
+    const std::size_t best =
+        static_cast<std::size_t>(std::max_element(w_.begin(), w_.end()) - w_.begin());
+    if (opt_.association != Association::kKnown) {
+      stats_.new_landmarks += static_cast<std::size_t>(outcome_[best].new_landmarks);
+      stats_.updates += static_cast<std::size_t>(outcome_[best].updates);
+    }
+    compute_estimate();
+    if (weighted) {
+      ++stats_.weighted_steps;
+      stats_.ess_fraction_sum += ws.ess / static_cast<double>(m_);
+    }
+    if (needs_resampling(ws.ess, m_, opt_.resample_threshold)) {
+      Rng rng({opt_.seed, n, 0, purpose::kResampling});
+      const auto ancestors = resample(ResamplingScheme::kSystematic, w_, m_, rng);
+      for (std::size_t j = 0; j < m_; ++j) {
+        next_[j] = particles_[ancestors[j]];
+        next_[j].log_w = 0.0;
+      }
+      particles_.swap(next_);
+      std::fill(w_.begin(), w_.end(), 1.0 / static_cast<double>(m_));
+      ++stats_.resamplings;
+    }
+  }
+
+  PoseEstimate pose() const override { return estimate_; }
+
+  MapEstimate map() const override {
+    MapEstimate out;
+    if (opt_.association == Association::kKnown) {
+      const std::size_t k = particles_[0].map.size();
+      out.landmarks.assign(k, Landmark::Zero());
+      for (std::size_t j = 0; j < m_; ++j)
+        particles_[j].map.for_each(
+            [&](std::size_t i, const LandmarkEstimate& l) { out.landmarks[i] += w_[j] * l.mean; });
+      out.ids.assign(id_of_slot_.begin(), id_of_slot_.begin() + static_cast<std::ptrdiff_t>(k));
+    } else {
+      const std::size_t best =
+          static_cast<std::size_t>(std::max_element(w_.begin(), w_.end()) - w_.begin());
+      particles_[best].map.for_each([&](std::size_t, const LandmarkEstimate& l) {
+        out.landmarks.push_back(l.mean);
+        out.ids.push_back(-1);
+      });
+    }
+    return out;
+  }
+
+  const SlamStats& stats() const override { return stats_; }
+
+  std::size_t map_bytes() const override {
+    std::unordered_set<const void*> seen;
+    std::size_t total = 0;
+    for (const auto& p : particles_) total += p.map.unique_bytes(seen);
+    return total;
+  }
+
+ private:
+  void compute_estimate() {
+    Pose mean = Pose::Zero();
+    double sn = 0.0, cs = 0.0;
+    for (std::size_t j = 0; j < m_; ++j) {
+      mean.head<2>() += w_[j] * particles_[j].x.head<2>();
+      sn += w_[j] * std::sin(particles_[j].x(2));
+      cs += w_[j] * std::cos(particles_[j].x(2));
+    }
+    // Keep the heading on the branch of the particles (the truth is unwrapped too).
+    const double ref = particles_[0].x(2);
+    mean(2) = ref + wrap_angle(std::atan2(sn, cs) - ref);
+    Mat<3> cov = Mat<3>::Zero();
+    for (std::size_t j = 0; j < m_; ++j) {
+      Vec<3> d = particles_[j].x - mean;
+      d(2) = wrap_angle(d(2));
+      cov.noalias() += w_[j] * d * d.transpose();
+    }
+    estimate_.mean = mean;
+    estimate_.cov = cov;
+  }
+
+  // One particle's move, proposal, weight and map update. Writes only to slot j.
+  void step_particle(std::size_t j, std::uint64_t n, const Control& u,
+                     std::span<const Observation> obs, std::size_t slots_before) {
+    thread_local std::vector<KnownObservation> known;
+    thread_local std::vector<Measurement> fresh;
+    thread_local std::vector<LandmarkTerm> terms;
+    known.clear();
+    fresh.clear();
+    ParticleOutcome& oc = outcome_[j];
+    oc = ParticleOutcome{};
+    Particle& p = particles_[j];
+    const RangeBearingSensor& s = opt_.sensor;
+    const Mat<2>& r = s.noise_covariance();
+    const Pose f = model_.predict(p.x, u);
+    const Mat<3> sigma1 = model_.process_covariance(p.x, u);
+    const Eigen::LLT<Mat<3>> llt1(sigma1);
+    if (llt1.info() != Eigen::Success || !f.allFinite()) {
+      p.x = f.allFinite() ? f : p.x;
+      p.log_w = -std::numeric_limits<double>::infinity();
+      return;
+    }
+    // Association against the particle's map as it was before this step.
+    for (std::size_t i = 0; i < obs.size(); ++i) {
+      if (use_[i] == 0) continue;
+      if (opt_.association == Association::kKnown) {
+        const auto slot = static_cast<std::size_t>(slots_[i]);
+        if (slot >= slots_before)
+          fresh.push_back(obs[i].z);
+        else
+          known.push_back({slot, obs[i].z, p.map.get(slot)});
+        continue;
+      }
+      double best = std::numeric_limits<double>::infinity();
+      std::size_t best_slot = 0;
+      bool found = false;
+      p.map.for_each([&](std::size_t k, const LandmarkEstimate& l) {
+        const double dx = l.mean(0) - f(0), dy = l.mean(1) - f(1);
+        const double range = std::sqrt(dx * dx + dy * dy);
+        if (std::abs(range - obs[i].z(0)) > 10.0 + 0.5 * obs[i].z(0)) return;  // cheap pre-gate
+        const Measurement e = RangeBearingSensor::residual(s.predict(f, l.mean), obs[i].z);
+        const Mat23 hx = s.jacobian_pose(f, l.mean);
+        const Mat<2> hm = -hx.leftCols<2>();
+        const Mat<2> sk = hx * sigma1 * hx.transpose() + hm * l.cov * hm.transpose() + r;
+        const Eigen::LLT<Mat<2>> llt(sk);
+        if (llt.info() != Eigen::Success) return;
+        const double d2 = e.dot(llt.solve(e));
+        if (!(d2 <= opt_.gate_chi2)) return;
+        const Mat<2> l2 = llt.matrixL();
+        const double cost = d2 + 2.0 * (std::log(l2(0, 0)) + std::log(l2(1, 1)));
+        if (cost < best) {
+          best = cost;
+          best_slot = k;
+          found = true;
+        }
+      });
+      if (found)
+        known.push_back({best_slot, obs[i].z, p.map.get(best_slot)});
+      else
+        fresh.push_back(obs[i].z);
+    }
+
+    const bool point_landmarks = opt_.method == SlamMethod::kImplicit;
+    const bool implicit = point_landmarks || opt_.method == SlamMethod::kImplicitRb;
+    Rng rng({opt_.seed, n, j, implicit ? purpose::kReference : purpose::kProposal});
+    double log_inc = 0.0;
+    Pose x = f;
+    bool landmark_placed = false;  // (A)'s 5-D map places its new landmark itself
+
+    if (known.empty()) {
+      if (point_landmarks && fresh.size() == 1) {
+        // (A), new landmark: joint 5-D linear map around the closed-form minimiser.
+        const NewLandmarkObjective F(f, sigma1, fresh[0], r);
+        const Eigen::LLT<Mat<5>> llt(F.hessian_at_minimizer());
+        if (!F.ok() || llt.info() != Eigen::Success) {
+          p.x = f;
+          p.log_w = -std::numeric_limits<double>::infinity();
+          return;
+        }
+        const Mat<5> l = llt.matrixL();
+        const Vec<5> xi = rng.normal_vector<5>();
+        const Vec<5> sample =
+            F.minimizer() + l.transpose().triangularView<Eigen::Upper>().solve(xi);
+        log_inc = 2.5 * kLog2Pi - l.diagonal().array().log().sum() + 0.5 * xi.squaredNorm() -
+                  F.evaluate(sample) - F.constant() + std::log(opt_.new_landmark_density) -
+                  std::log(fresh[0](0));
+        x = sample.head<3>();
+        p.map.push_back({sample.tail<2>(), Mat<2>::Zero()});
+        landmark_placed = true;
+        ++oc.new_landmarks;
+      } else {
+        x = f + llt1.matrixL() * rng.normal_vector<3>();
+      }
+    } else if (opt_.method == SlamMethod::kFastSlam1) {
+      x = f + llt1.matrixL() * rng.normal_vector<3>();
+      for (const auto& k : known) {
+        const Mat<2> hm = s.jacobian_landmark(x, k.landmark.mean);
+        const Eigen::LLT<Mat<2>> llt(hm * k.landmark.cov * hm.transpose() + r);
+        const Measurement nu = -RangeBearingSensor::residual(s.predict(x, k.landmark.mean), k.z);
+        log_inc += llt.info() == Eigen::Success ? log_normal2(nu, llt)
+                                                : -std::numeric_limits<double>::infinity();
+      }
+    } else if (opt_.method == SlamMethod::kFastSlam2) {
+      // Linearised optimal proposal at f (all known detections jointly) and its exact weight
+      // N(nu; 0, H_x Sigma1 H_x^T + Q) via the information form.
+      Mat<3> lambda = llt1.solve(Mat<3>::Identity());
+      Vec<3> b = Vec<3>::Zero();
+      double quad = 0.0, log_det_q = 0.0;
+      bool ok = true;
+      for (const auto& k : known) {
+        const Mat23 hx = s.jacobian_pose(f, k.landmark.mean);
+        const Mat<2> hm = -hx.leftCols<2>();
+        const Eigen::LLT<Mat<2>> llt(hm * k.landmark.cov * hm.transpose() + r);
+        if (llt.info() != Eigen::Success) {
+          ok = false;
+          break;
+        }
+        const Measurement nu = -RangeBearingSensor::residual(s.predict(f, k.landmark.mean), k.z);
+        const Vec<2> qnu = llt.solve(nu);
+        lambda.noalias() += hx.transpose() * llt.solve(hx);
+        b.noalias() += hx.transpose() * qnu;
+        quad += nu.dot(qnu);
+        const Mat<2> l = llt.matrixL();
+        log_det_q += 2.0 * (std::log(l(0, 0)) + std::log(l(1, 1)));
+      }
+      lambda = 0.5 * (lambda + lambda.transpose()).eval();
+      const Eigen::LLT<Mat<3>> lltl(lambda);
+      if (!ok || lltl.info() != Eigen::Success) {
+        p.x = f;
+        p.log_w = -std::numeric_limits<double>::infinity();
+        return;
+      }
+      const Vec<3> shift = lltl.solve(b);
+      const Mat<3> ll = lltl.matrixL();
+      const Mat<3> l1 = llt1.matrixL();
+      const double log_det_sigma1 = 2.0 * l1.diagonal().array().log().sum();
+      const double log_det_lambda = 2.0 * ll.diagonal().array().log().sum();
+      log_inc = -0.5 * (quad - b.dot(shift)) - 0.5 * (log_det_q + log_det_sigma1 + log_det_lambda) -
+                static_cast<double>(known.size()) * kLog2Pi;
+      const Vec<3> xi = rng.normal_vector<3>();
+      x = f + shift + ll.transpose().triangularView<Eigen::Upper>().solve(xi);
+    } else {
+      // Implicit: (A) point landmarks with S = Sigma2, (B) EKF landmarks with S frozen at f.
+      terms.resize(known.size());
+      bool ok = true;
+      for (std::size_t i = 0; i < known.size(); ++i) {
+        const auto& k = known[i];
+        Mat<2> sk = r;
+        if (!point_landmarks) {
+          const Mat<2> hm = s.jacobian_landmark(f, k.landmark.mean);
+          sk += hm * k.landmark.cov * hm.transpose();
+        }
+        ok = ok && terms[i].set(k.landmark.mean, k.z, sk);
+      }
+      const PoseObjective F(f, sigma1, terms);
+      const PoseLaplace lp =
+          ok ? minimize_pose_objective(F, f, opt_.newton_max_iterations, opt_.newton_step_tolerance)
+             : PoseLaplace{};
+      oc.newton_iterations += lp.iterations;
+      ++oc.newton_solves;
+      if (!lp.converged) ++oc.newton_not_converged;
+      if (!lp.ok) {
+        p.x = f;
+        p.log_w = -std::numeric_limits<double>::infinity();
+        return;
+      }
+      const Vec<3> xi = rng.normal_vector<3>();
+      x = lp.mu + lp.L.transpose().triangularView<Eigen::Upper>().solve(xi);
+      log_inc = 1.5 * kLog2Pi - lp.log_det_L + 0.5 * xi.squaredNorm() - F.value(x) - F.constant();
+    }
+
+    if (!x.allFinite() || std::isnan(log_inc)) {
+      p.x = f;
+      p.log_w = -std::numeric_limits<double>::infinity();
+      return;
+    }
+    p.x = x;
+    // Map: EKF updates of the known landmarks at the sampled pose (not in (A)), new landmarks.
+    if (!point_landmarks) {
+      for (const auto& k : known) {
+        LandmarkEstimate l = k.landmark;
+        const Mat<2> hm = s.jacobian_landmark(x, l.mean);
+        const Eigen::LLT<Mat<2>> llt(hm * l.cov * hm.transpose() + r);
+        if (llt.info() != Eigen::Success) continue;
+        const Measurement nu = -RangeBearingSensor::residual(s.predict(x, l.mean), k.z);
+        const Eigen::Matrix<double, 2, 2> pht = l.cov * hm.transpose();
+        const Mat<2> gain = llt.solve(pht.transpose()).transpose();
+        l.mean += gain * nu;
+        const Mat<2> a = Mat<2>::Identity() - gain * hm;
+        Mat<2> c = a * l.cov * a.transpose() + gain * r * gain.transpose();
+        l.cov = 0.5 * (c + c.transpose());
+        p.map.set(k.slot, l);
+        ++oc.updates;
+      }
+    } else {
+      oc.updates += static_cast<int>(known.size());
+    }
+    if (!landmark_placed) {
+      for (const Measurement& z : fresh) {
+        const Mat<2> gz = RangeBearingSensor::inverse_jacobian_measurement(x, z);
+        p.map.push_back({RangeBearingSensor::inverse(x, z),
+                         point_landmarks ? Mat<2>::Zero() : Mat<2>(gz * r * gz.transpose())});
+        log_inc += std::log(opt_.new_landmark_density);
+        ++oc.new_landmarks;
+      }
+    }
+    p.log_w += log_inc;
+  }
+
+  SlamOptions opt_;
+  robot::UteModel model_;
+  std::size_t m_;
+  std::vector<Particle> particles_, next_;
+  std::vector<double> log_w_, w_;
+  std::vector<ParticleOutcome> outcome_;
+  std::vector<int> slot_of_id_, id_of_slot_;
+  std::vector<int> slots_, use_;
+  PoseEstimate estimate_;
+  SlamStats stats_;
+};
+
+}  // namespace
+
+std::unique_ptr<SlamFilter> make_slam_filter(const SlamOptions& options, const Pose& x0) {
+  options.validate();
+  require(x0.allFinite(), "SLAM filter: expected a finite initial pose, got ({}, {}, {})", x0(0),
+          x0(1), x0(2));
+  if (options.method == SlamMethod::kEkf) return std::make_unique<EkfSlamFilter>(options, x0);
+  return std::make_unique<ParticleSlamFilter>(options, x0);
+}
+
+}  // namespace implicit::slam
