@@ -20,17 +20,20 @@ int grid_count(double t, double dt, const char* name) {
   const double r = t / dt;
   const double k = std::round(r);
   require(std::abs(r - k) <= 1e-9 * std::max(1.0, r) && k >= 1.0,
-          "double slit: expected {} to be a positive multiple of dt, got {} / {} = {}", name, t,
-          dt, r);
+          "double slit: expected {} to be a positive multiple of dt, got {} / {} = {}", name, t, dt,
+          r);
   return static_cast<int>(k);
 }
 }  // namespace
 
 std::string_view to_string(SlitEstimator e) {
   switch (e) {
-    case SlitEstimator::kPaper: return "paper";
-    case SlitEstimator::kFrozenWall: return "corrected";
-    case SlitEstimator::kPlainFd: return "plain";
+    case SlitEstimator::kPaper:
+      return "paper";
+    case SlitEstimator::kFrozenWall:
+      return "corrected";
+    case SlitEstimator::kPlainFd:
+      return "plain";
   }
   return "unknown";
 }
@@ -69,8 +72,8 @@ bool DoubleSlit::in_slits(double x) const {
 }
 
 void DoubleSlit::require_step(int k, const char* what) const {
-  require(k >= 0 && k < num_steps_, "double slit {}: expected a grid step in [0, {}), got {}",
-          what, num_steps_, k);
+  require(k >= 0 && k < num_steps_, "double slit {}: expected a grid step in [0, {}), got {}", what,
+          num_steps_, k);
 }
 
 // ---- Exact solution ------------------------------------------------------------------------
@@ -78,8 +81,8 @@ void DoubleSlit::require_step(int k, const char* what) const {
 double DoubleSlit::exact_log_psi(double x, double t) const {
   const double tf = p_.final_time, t1 = p_.wall_time, s = p_.sigma;
   require(std::isfinite(x), "double slit log psi: expected a finite state, got {}", x);
-  require(t >= -1e-12 && t <= tf + 1e-12,
-          "double slit log psi: expected a time in [0, {}], got {}", tf, t);
+  require(t >= -1e-12 && t <= tf + 1e-12, "double slit log psi: expected a time in [0, {}], got {}",
+          tf, t);
   const double spread = gamma_ + s * (tf - t);
   const double base = 0.5 * std::log(gamma_ / spread) - x * x / (2.0 * spread);
   const double eps = 1e-12 * std::max(1.0, t1);
@@ -96,8 +99,8 @@ double DoubleSlit::exact_log_psi(double x, double t) const {
 double DoubleSlit::exact_control(double x, double t) const {
   const double tf = p_.final_time, t1 = p_.wall_time, s = p_.sigma;
   require(std::isfinite(x), "double slit control: expected a finite state, got {}", x);
-  require(t >= -1e-12 && t <= tf + 1e-12,
-          "double slit control: expected a time in [0, {}], got {}", tf, t);
+  require(t >= -1e-12 && t <= tf + 1e-12, "double slit control: expected a time in [0, {}], got {}",
+          tf, t);
   const double spread = gamma_ + s * (tf - t);
   // At and after t1 the wall no longer constrains the future: the unconstrained LQ control.
   if (t >= t1 - 1e-12 * std::max(1.0, t1)) return -s * x / spread;
@@ -161,7 +164,8 @@ Eigen::VectorXd DoubleSlit::minimizer_path(double x, int k, double edge) const {
   const double s = p_.sigma, dt = p_.dt;
   Eigen::VectorXd mu(n);
   if (k >= wall_step_) {
-    for (int i = 1; i <= n; ++i) mu(i - 1) = x * (gamma_ + s * (n - i) * dt) / (gamma_ + s * n * dt);
+    for (int i = 1; i <= n; ++i)
+      mu(i - 1) = x * (gamma_ + s * (n - i) * dt) / (gamma_ + s * n * dt);
     return mu;
   }
   const int w = wall_step_ - k;
@@ -205,8 +209,10 @@ void DoubleSlit::path_weights(double x, int k, int s, double edge, const Eigen::
                               std::vector<double>& log_w, std::vector<double>* delta,
                               Eigen::MatrixXd* paths) const {
   const int n = num_steps_ - k;
-  require(xi.rows() == n, "double slit path sampler: expected reference variables of length {}, "
-                          "got {}", n, xi.rows());
+  require(xi.rows() == n,
+          "double slit path sampler: expected reference variables of length {}, "
+          "got {}",
+          n, xi.rows());
   const auto& chol = factors_[static_cast<std::size_t>(k)];
   const Eigen::VectorXd mu = minimizer_path(x, k, edge);
   const double log_norm = log_normalizer(k);
@@ -223,15 +229,14 @@ void DoubleSlit::path_weights(double x, int k, int s, double edge, const Eigen::
     if (walled && delta) (*delta)[static_cast<std::size_t>(j)] = y(w - 1);
     y += mu;
     if (paths) paths->col(j) = y;
-    const bool pass =
-        !walled || p_.slits[static_cast<std::size_t>(s)].contains(y(w - 1));
+    const bool pass = !walled || p_.slits[static_cast<std::size_t>(s)].contains(y(w - 1));
     log_w[static_cast<std::size_t>(j)] =
         pass ? -log_norm - path_function(x, y) + 0.5 * xi.col(j).squaredNorm() : -kInf;
   }
 }
 
-double DoubleSlit::combine(const std::vector<double>& lw0, const std::vector<double>& lw1,
-                           int M, SlitEstimator estimator, int dominant, double phi_dominant,
+double DoubleSlit::combine(const std::vector<double>& lw0, const std::vector<double>& lw1, int M,
+                           SlitEstimator estimator, int dominant, double phi_dominant,
                            int k) const {
   if (estimator == SlitEstimator::kPaper) {
     const auto& lw = dominant == 0 ? lw0 : lw1;
@@ -300,8 +305,7 @@ SlitControlEstimate DoubleSlit::estimate_control(double x, int k, int M, SlitEst
     return out;
   }
 
-  const std::array<SlitMinimum, 2> at_x{constrained_minimum(x, k, 0),
-                                        constrained_minimum(x, k, 1)};
+  const std::array<SlitMinimum, 2> at_x{constrained_minimum(x, k, 0), constrained_minimum(x, k, 1)};
   const int dom = at_x[0].phi <= at_x[1].phi ? 0 : 1;
   const bool frozen = estimator == SlitEstimator::kFrozenWall;
   const double log_norm = log_normalizer(k);
@@ -381,14 +385,15 @@ SlitControlEstimate DoubleSlit::estimate_control(double x, int k, int M, SlitEst
 
 double DoubleSlit::frozen_wall_limit(double x, int k, int M, const StreamKey& key,
                                      SlitSampling sampling) const {
-  require(k >= 0 && k < wall_step_, "double slit frozen-wall limit: expected a step in [0, {}), "
-                                    "got {}", wall_step_, k);
+  require(k >= 0 && k < wall_step_,
+          "double slit frozen-wall limit: expected a step in [0, {}), "
+          "got {}",
+          wall_step_, k);
   require(M >= 1, "double slit frozen-wall limit: expected at least 1 sample, got {}", M);
   const int n = num_steps_ - k;
   Rng rng({key.seed, key.step, key.index, purpose::kReference});
   std::array<std::vector<double>, 2> lw, delta;
-  const std::array<SlitMinimum, 2> mins{constrained_minimum(x, k, 0),
-                                        constrained_minimum(x, k, 1)};
+  const std::array<SlitMinimum, 2> mins{constrained_minimum(x, k, 0), constrained_minimum(x, k, 1)};
   if (sampling == SlitSampling::kWall) {
     const double tau = std::sqrt(tau2(k));
     for (int s = 0; s < 2; ++s) {
@@ -407,7 +412,8 @@ double DoubleSlit::frozen_wall_limit(double x, int k, int M, const StreamKey& ke
     std::array<Eigen::MatrixXd, 2> xi{Eigen::MatrixXd(n, M), Eigen::MatrixXd(n, M)};
     rng.fill_normal(xi[0]);
     rng.fill_normal(xi[1]);
-    for (int s = 0; s < 2; ++s) path_weights(x, k, s, mins[s].edge, xi[s], lw[s], &delta[s], nullptr);
+    for (int s = 0; s < 2; ++s)
+      path_weights(x, k, s, mins[s].edge, xi[s], lw[s], &delta[s], nullptr);
   }
   double lmax = -kInf;
   for (int s = 0; s < 2; ++s)
@@ -434,9 +440,9 @@ std::vector<double> DoubleSlit::path_log_weights(double x, int k, int s, const E
   return lw;
 }
 
-PlainMonteCarloResult DoubleSlit::plain_monte_carlo(double x, int k, int paths,
-                                                    std::uint64_t seed, std::uint64_t step,
-                                                    Eigen::MatrixXd* kept, int keep) const {
+PlainMonteCarloResult DoubleSlit::plain_monte_carlo(double x, int k, int paths, std::uint64_t seed,
+                                                    std::uint64_t step, Eigen::MatrixXd* kept,
+                                                    int keep) const {
   require_step(k, "plain Monte Carlo");
   require(paths >= 1, "double slit plain Monte Carlo: expected at least 1 path, got {}", paths);
   const int n = num_steps_ - k;
@@ -478,8 +484,7 @@ SlitRun simulate_slit_run(const DoubleSlit& slit, int samples, SlitEstimator est
     Rng rng({seed, run, 0, purpose::kProcessNoise});
     rng.fill_normal(W);
   }
-  require(W.size() == K, "double slit closed loop: expected {} noise values, got {}", K,
-          W.size());
+  require(W.size() == K, "double slit closed loop: expected {} noise values, got {}", K, W.size());
   SlitRun r;
   r.x_exact.resize(K + 1);
   r.x_estimate.resize(K + 1);
@@ -493,14 +498,12 @@ SlitRun simulate_slit_run(const DoubleSlit& slit, int samples, SlitEstimator est
     r.u_exact(k) = slit.exact_control(r.x_exact(k), t);
     if (k < K1) {
       const auto e = slit.estimate_control(r.x_estimate(k), k, samples, estimator,
-                                           {seed, run, static_cast<std::uint64_t>(k), 0},
-                                           sampling);
+                                           {seed, run, static_cast<std::uint64_t>(k), 0}, sampling);
       r.u_estimate(k) = e.u;
       r.fallbacks += e.fallback ? 1 : 0;
       ess_sum += e.ess;
     } else {
-      r.u_estimate(k) =
-          -p.sigma * r.x_estimate(k) / (slit.gamma() + p.sigma * (p.final_time - t));
+      r.u_estimate(k) = -p.sigma * r.x_estimate(k) / (slit.gamma() + p.sigma * (p.final_time - t));
     }
     r.x_exact(k + 1) = r.x_exact(k) + r.u_exact(k) * p.dt + sd * W(k);
     r.x_estimate(k + 1) = r.x_estimate(k) + r.u_estimate(k) * p.dt + sd * W(k);

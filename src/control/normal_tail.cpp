@@ -10,7 +10,8 @@ namespace implicit::control {
 double log_normal_cdf(double z) {
   if (std::isnan(z)) return z;
   if (z == std::numeric_limits<double>::infinity()) return 0.0;
-  if (z == -std::numeric_limits<double>::infinity()) return -std::numeric_limits<double>::infinity();
+  if (z == -std::numeric_limits<double>::infinity())
+    return -std::numeric_limits<double>::infinity();
   if (z > 5.0) return std::log1p(-0.5 * std::erfc(z / std::sqrt(2.0)));
   if (z > -30.0) return std::log(0.5 * std::erfc(-z / std::sqrt(2.0)));
   // Mills-ratio series: Phi(z) = phi(z)/|z| (1 - 1/z^2 + 3/z^4 - 15/z^6 + 105/z^8 - ...);

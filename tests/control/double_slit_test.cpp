@@ -71,14 +71,20 @@ TEST(DoubleSlitExact, ReferenceTable) {
     double x, t, psi, log_psi, u;
   };
   const Row rows[] = {
-      {1, 0, 3.517678e-11, -24.070635, -5.109548},   {0, 0, 3.558425e-09, -19.453948, -4.123520},
-      {-1, 0, 1.343784e-07, -15.822606, -3.139799},  {2, 0, 4.565707e-13, -28.415033, 1.210041},
-      {2.5, 0, 2.252879e-12, -26.818812, 3.582375},  {1, 0.5, 1.184838e-16, -36.671755, -10.14038},
-      {-3, 0.5, 7.139619e-06, -11.849851, -2.308373}, {3, 0.5, 1.403840e-13, -29.594395, 6.167602},
+      {1, 0, 3.517678e-11, -24.070635, -5.109548},
+      {0, 0, 3.558425e-09, -19.453948, -4.123520},
+      {-1, 0, 1.343784e-07, -15.822606, -3.139799},
+      {2, 0, 4.565707e-13, -28.415033, 1.210041},
+      {2.5, 0, 2.252879e-12, -26.818812, 3.582375},
+      {1, 0.5, 1.184838e-16, -36.671755, -10.14038},
+      {-3, 0.5, 7.139619e-06, -11.849851, -2.308373},
+      {3, 0.5, 1.403840e-13, -29.594395, 6.167602},
       {-4.5, 0.9, 4.127524e-05, -10.095248, 2.069796},
       {-3.9, 0.98, 3.799832e-05, -10.177969, -8.403701},
-      {7, 0.98, 9.444940e-11, -23.082957, -6.250000}, {-5, 1.0, 3.500573e-06, -12.562584, 4.545455},
-      {1, 1.5, 0.1774240, -1.7292131, -1.666667},    {0.5, 1.98, 0.3221212, -1.1328274, -4.166667},
+      {7, 0.98, 9.444940e-11, -23.082957, -6.250000},
+      {-5, 1.0, 3.500573e-06, -12.562584, 4.545455},
+      {1, 1.5, 0.1774240, -1.7292131, -1.666667},
+      {0.5, 1.98, 0.3221212, -1.1328274, -4.166667},
   };
   DoubleSlit slit;
   for (const auto& r : rows) {
@@ -90,9 +96,10 @@ TEST(DoubleSlitExact, ReferenceTable) {
     // u = sigma d/dx log psi, by a 4th-order central difference (error ~ h^4 |f'''''| ~ 1e-10).
     if (r.t < 1.0) {
       const double h = 1e-3;
-      const double d = (-slit.exact_log_psi(r.x + 2 * h, r.t) + 8 * slit.exact_log_psi(r.x + h, r.t) -
-                        8 * slit.exact_log_psi(r.x - h, r.t) + slit.exact_log_psi(r.x - 2 * h, r.t)) /
-                       (12 * h);
+      const double d =
+          (-slit.exact_log_psi(r.x + 2 * h, r.t) + 8 * slit.exact_log_psi(r.x + h, r.t) -
+           8 * slit.exact_log_psi(r.x - h, r.t) + slit.exact_log_psi(r.x - 2 * h, r.t)) /
+          (12 * h);
       EXPECT_NEAR(slit.exact_control(r.x, r.t), d, 1e-7 * (1 + std::abs(d)));
     }
   }
@@ -307,9 +314,9 @@ TEST(DoubleSlitControl, AfterTheWallExactForAnyM) {
   for (int M : {1, 3, 20}) {
     for (int k : {50, 70, 99}) {
       for (double x : {-5.0, 0.3, 7.0}) {
-        const auto e = slit.estimate_control(x, k, M, SlitEstimator::kFrozenWall,
-                                             {2, 0, static_cast<std::uint64_t>(k), 0},
-                                             SlitSampling::kPath);
+        const auto e =
+            slit.estimate_control(x, k, M, SlitEstimator::kFrozenWall,
+                                  {2, 0, static_cast<std::uint64_t>(k), 0}, SlitSampling::kPath);
         EXPECT_NEAR(e.u, slit.exact_control(x, slit.time(k)), 1e-8);
       }
     }
@@ -325,8 +332,8 @@ TEST(DoubleSlitControl, PointOraclesAtM500) {
     int k;
     double exact, sd;
   };
-  const Point points[] = {{1.0, 0, -5.109548, 0.0101}, {-3.0, 25, -2.308373, 0.021},
-                          {-3.9, 49, -8.403701, 0.176}};
+  const Point points[] = {
+      {1.0, 0, -5.109548, 0.0101}, {-3.0, 25, -2.308373, 0.021}, {-3.9, 49, -8.403701, 0.176}};
   const int reps = 1000;
   for (const auto& pt : points) {
     std::vector<double> u(reps);

@@ -41,8 +41,8 @@ struct Slit {
 
 /// Table 1 of the paper. gamma = r sigma (spec E10).
 struct DoubleSlitParameters {
-  double final_time = 2.0;     ///< tf
-  double wall_time = 1.0;      ///< t1, a multiple of dt
+  double final_time = 2.0;  ///< tf
+  double wall_time = 1.0;   ///< t1, a multiple of dt
   std::array<Slit, 2> slits{{{-6.0, -4.0}, {6.0, 8.0}}};
   double initial_state = 1.0;  ///< x(0)
   double sigma = 1.0;          ///< noise intensity: dx = u dt + sqrt(sigma) dW
@@ -105,7 +105,8 @@ class DoubleSlit {
   // ---- Exact solution (spec §2.4.1) ----------------------------------------------------------
   /// log psi(x, t); -inf at t = t1 outside the slits. Throws for t outside [0, tf].
   double exact_log_psi(double x, double t) const;
-  /// u(x, t) = sigma d/dx log psi. For t >= t1 the wall is behind: u = -sigma x/(gamma + sigma(tf-t)).
+  /// u(x, t) = sigma d/dx log psi. For t >= t1 the wall is behind: u = -sigma x/(gamma +
+  /// sigma(tf-t)).
   double exact_control(double x, double t) const;
 
   // ---- Discretised path problem at grid step k < K (spec §2.4.3) -------------------------------
@@ -182,12 +183,12 @@ class DoubleSlit {
 struct SlitRun {
   Eigen::VectorXd x_exact, x_estimate;  ///< K + 1 states
   Eigen::VectorXd u_exact, u_estimate;  ///< K controls
-  double error_x = 0.0;  ///< |X_IS - X_ex| / |X_ex|
-  double error_u = 0.0;  ///< |U_IS - U_ex| / |U_ex|
-  bool crashed_exact = false;     ///< exact trajectory missed the slits at t1
-  bool crashed_estimate = false;  ///< estimated trajectory missed the slits at t1
-  int fallbacks = 0;              ///< steps where no sample passed
-  double ess_mean = 0.0;          ///< mean ESS over the steps k < K1
+  double error_x = 0.0;                 ///< |X_IS - X_ex| / |X_ex|
+  double error_u = 0.0;                 ///< |U_IS - U_ex| / |U_ex|
+  bool crashed_exact = false;           ///< exact trajectory missed the slits at t1
+  bool crashed_estimate = false;        ///< estimated trajectory missed the slits at t1
+  int fallbacks = 0;                    ///< steps where no sample passed
+  double ess_mean = 0.0;                ///< mean ESS over the steps k < K1
 };
 
 /// Runs the closed loop for run number `run`: noise W_k from stream (seed, run, 0,

@@ -224,8 +224,8 @@ struct BandedMinimizeResult {
   Eigen::VectorXd x;  ///< the minimiser (or the last iterate), n B entries
   double value = std::numeric_limits<double>::quiet_NaN();  ///< F(x)
   Eigen::VectorXd gradient;
-  BlockTridiagonal<B> hessian;           ///< exact Hessian at x (possibly indefinite)
-  BlockTridiagonalCholesky<B> factor;    ///< Cholesky of `hessian` (ok() if SPD)
+  BlockTridiagonal<B> hessian;         ///< exact Hessian at x (possibly indefinite)
+  BlockTridiagonalCholesky<B> factor;  ///< Cholesky of `hessian` (ok() if SPD)
   int iterations = 0;
   int evaluations = 0;
   MinimizeStatus status = MinimizeStatus::kMaxIterations;
