@@ -1,0 +1,176 @@
+"""Shared helpers for the figure scripts python/plots/figureN.py.
+
+Every figure script is called as
+
+    /usr/bin/python3 python/plots/figureN.py DIR
+
+by `implicit reproduce` (or by hand), reads CSV files that the experiments wrote into DIR, and
+writes DIR/figureN.png and DIR/figureN.svg. A script must fail loudly (non-zero exit, a message
+naming the file, line and column) on missing or malformed data, never draw an empty figure.
+
+A figure script looks like this:
+
+    # Figure 2 of the paper: double slit, trajectory and control, exact vs implicit sampling.
+    from common import figure_main, load_csv, save, subplots
+
+    def draw(d):
+        t = load_csv(d, "figure2_slit.csv", ["t", "x_exact", "x_implicit"])
+        fig, ax = subplots(1, 2)
+        ax[0].plot(t["t"], t["x_exact"], label="exact")
+        ax[0].set_xlabel("time t [s]")
+        ...
+        save(fig, d, 2)
+
+    if __name__ == "__main__":
+        figure_main(draw)
+
+Common mistakes: forgetting axis units, and catching exceptions in a figure script (let
+DataError propagate: figure_main turns it into a clear message and exit code 1).
+"""
+
+import csv
+import json
+import math
+import os
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # no display: the report is drawn on servers and in CI
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+# One colour per role, used by every figure (close to the paper's turquoise/red pairs).
+COLORS = {
+    "exact": "#1fa0a8",  # exact solution, ground truth
+    "implicit": "#d62728",  # implicit sampling
+    "standard": "#1f77b4",  # standard / bootstrap / plain Monte Carlo
+    "ekf": "#7f7f7f",
+    "fastslam1": "#9467bd",
+    "fastslam2": "#ff7f0e",
+    "implicit-rb": "#8c564b",
+    "landmark": "#0b3d91",
+    "wall": "#333333",
+    "paper": "#000000",
+}
+
+
+class DataError(Exception):
+    """Missing or malformed figure data; the message names the file, line and column."""
+
+
+def _parse_float(text):
+    text = text.strip()
+    if text == "":
+        return math.nan  # missing value (e.g. a table cell the paper does not have)
+    return float(text)  # accepts nan, inf
+
+
+def load_csv(directory, name, columns=(), text_columns=()):
+    """Reads DIR/name into a dict column -> numpy array.
+
+    `columns` must exist and be numeric (empty cells become NaN); `text_columns` must exist and
+    are kept as strings. Other columns are numeric when every value parses, text otherwise.
+    Raises DataError for a missing file, a missing column, a row with the wrong number of
+    fields, a non-numeric value in a numeric column, or a file without data rows.
+    """
+    path = Path(directory) / name
+    if not path.is_file():
+        raise DataError(
+            f"{path}: figure data not found (expected a CSV file written by the experiment; "
+            f"run `implicit reproduce --out {directory}` or the experiment with --out)")
+    with open(path, newline="") as f:
+        rows = [r for r in csv.reader(f) if r and not r[0].startswith("#")]
+    if not rows:
+        raise DataError(f"{path}: expected a header line, got an empty file")
+    header = [h.strip() for h in rows[0]]
+    data = rows[1:]
+    if not data:
+        raise DataError(f"{path}: expected at least one data row after the header, got none")
+    missing = [c for c in list(columns) + list(text_columns) if c not in header]
+    if missing:
+        raise DataError(f"{path}: expected column(s) {', '.join(missing)}, got columns "
+                        f"{', '.join(header)}")
+    for i, row in enumerate(data):
+        if len(row) != len(header):
+            raise DataError(f"{path}:{i + 2}: expected {len(header)} fields as in the header, "
+                            f"got {len(row)}")
+    out = {}
+    for j, col in enumerate(header):
+        values = [row[j] for row in data]
+        if col in text_columns:
+            out[col] = np.array(values, dtype=object)
+            continue
+        parsed = []
+        bad = None
+        for i, v in enumerate(values):
+            try:
+                parsed.append(_parse_float(v))
+            except ValueError:
+                bad = (i, v)
+                break
+        if bad is None:
+            out[col] = np.array(parsed, dtype=float)
+        elif col in columns:
+            raise DataError(f"{path}:{bad[0] + 2}: column '{col}': expected a number, got "
+                            f"'{bad[1]}'")
+        else:
+            out[col] = np.array(values, dtype=object)
+    return out
+
+
+def load_results(directory):
+    """Reads DIR/results.json (written by `implicit reproduce`) as a dict."""
+    path = Path(directory) / "results.json"
+    if not path.is_file():
+        raise DataError(f"{path}: not found (run `implicit reproduce --out {directory}`)")
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except json.JSONDecodeError as e:
+        raise DataError(f"{path}:{e.lineno}: malformed JSON: {e.msg}") from e
+
+
+def subplots(nrows=1, ncols=1, width=None, height=None):
+    """A figure with the project's default size (about 5 x 4 inches per panel).
+
+    Like matplotlib's: one Axes for 1 x 1, a 1-D array for one row or column, else 2-D.
+    """
+    return plt.subplots(nrows, ncols, figsize=(width or 5.0 * ncols, height or 4.0 * nrows))
+
+
+def save(fig, directory, number):
+    """Writes DIR/figureN.png (150 dpi) and DIR/figureN.svg, and closes the figure."""
+    directory = Path(directory)
+    fig.tight_layout()
+    png = directory / f"figure{number}.png"
+    svg = directory / f"figure{number}.svg"
+    fig.savefig(png, dpi=150)
+    fig.savefig(svg)
+    plt.close(fig)
+    print(f"wrote {png} and {svg}")
+    return png, svg
+
+
+def figure_main(draw, argv=None):
+    """Entry point of a figure script: parses DIR from the command line, calls draw(DIR).
+
+    Exit codes: 0 drawn, 1 missing or malformed data (message on stderr), 2 bad usage.
+    """
+    argv = sys.argv if argv is None else argv
+    script = os.path.basename(argv[0]) if argv else "figure"
+    if len(argv) != 2:
+        print(f"usage: {script} DIR   (DIR holds the CSV files of `implicit reproduce`)",
+              file=sys.stderr)
+        sys.exit(2)
+    directory = Path(argv[1])
+    if not directory.is_dir():
+        print(f"{script}: error: {directory}: expected a folder with the experiment CSV files, "
+              f"got no such folder", file=sys.stderr)
+        sys.exit(2)
+    try:
+        draw(directory)
+    except DataError as e:
+        print(f"{script}: error: {e}", file=sys.stderr)
+        sys.exit(1)

@@ -1,0 +1,125 @@
+// The `implicit` command line: version, usage errors (exit code 2, the flag named), the options
+// every subcommand shares, and the plot helpers' loud failures on bad figure data.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+
+#include "apps/cli_runner.hpp"
+
+namespace {
+
+using implicit::test::run_cli;
+using implicit::test::run_shell;
+using implicit::test::TempDir;
+
+TEST(Cli, VersionPrintsVersionAndCommit) {
+  const auto r = run_cli("--version");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(std::regex_search(r.out, std::regex(R"(implicit \d+\.\d+\.\d+ \(commit [0-9a-z]+\))")))
+      << r.out;
+}
+
+TEST(Cli, NoArgumentsPrintsHelpWithExitCodes) {
+  const auto r = run_cli("");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("reproduce"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Exit codes"), std::string::npos) << r.out;
+}
+
+TEST(Cli, UnknownFlagNamesTheFlagAndExits2) {
+  const auto r = run_cli("reproduce --no-such-flag");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--no-such-flag"), std::string::npos) << r.err;
+}
+
+TEST(Cli, UnknownSubcommandExits2) {
+  const auto r = run_cli("no-such-command");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("no-such-command"), std::string::npos) << r.err;
+}
+
+TEST(Cli, OutOfRangeValueNamesTheFlagAndTheRange) {
+  const auto r = run_cli("reproduce --threads -3");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--threads"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1024"), std::string::npos) << "accepted range missing: " << r.err;
+}
+
+TEST(Cli, NonNumericValueNamesTheFlag) {
+  const auto r = run_cli("reproduce --seed abc");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--seed"), std::string::npos) << r.err;
+}
+
+TEST(Cli, UnknownExperimentNamesTheFlagAndTheChoices) {
+  const auto r = run_cli("reproduce --only slit,nonsense");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--only"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("himmelblau"), std::string::npos) << "choices missing: " << r.err;
+}
+
+// Every subcommand shares --seed --json --out --threads --quiet --help and shows examples.
+TEST(Cli, EverySubcommandHasTheCommonOptionsAndExamples) {
+  const auto top = run_cli("--help");
+  ASSERT_EQ(top.code, 0);
+  const auto start = top.out.find("Subcommands:");
+  ASSERT_NE(start, std::string::npos) << top.out;
+  std::istringstream lines(top.out.substr(start));
+  std::string line;
+  std::getline(lines, line);  // "Subcommands:"
+  std::set<std::string> names;
+  while (std::getline(lines, line)) {
+    std::smatch m;
+    if (!std::regex_search(line, m, std::regex(R"(^  ([a-z][a-z0-9-]*)\s)"))) break;
+    names.insert(m[1]);
+  }
+  ASSERT_TRUE(names.count("reproduce")) << top.out;
+  for (const auto& name : names) {
+    const auto r = run_cli(name + " --help");
+    EXPECT_EQ(r.code, 0) << name;
+    for (const char* option : {"--seed", "--json", "--out", "--threads", "--quiet", "--help"})
+      EXPECT_NE(r.out.find(option), std::string::npos) << name << " lacks " << option;
+    EXPECT_NE(r.out.find("Examples:"), std::string::npos) << name << " has no examples";
+  }
+}
+
+// python/plots/common.py: missing file, missing column, bad number and short row each fail with
+// exit code 1 and a message naming file, line and column.
+TEST(PlotHelpers, FailLoudlyOnMissingOrMalformedCsv) {
+  const std::string script =
+      std::string(IMPLICIT_SOURCE_DIR) + "/tests/apps/plots_common_check.py";
+  const std::string plots = std::string(IMPLICIT_SOURCE_DIR) + "/python/plots";
+  TempDir dir("plots_common");
+  const auto r = run_shell("/usr/bin/python3 '" + script + "' '" + plots + "' '" +
+                           dir.path().string() + "'");
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+}
+
+// Each figure script fails (non-zero exit, names the missing file) on a folder without data.
+TEST(PlotHelpers, EveryFigureScriptFailsLoudlyWithoutData) {
+  const std::filesystem::path plots = std::filesystem::path(IMPLICIT_SOURCE_DIR) / "python" / "plots";
+  TempDir dir("plots_empty");
+  int scripts = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(plots)) {
+    const auto name = entry.path().filename().string();
+    if (!std::regex_match(name, std::regex(R"(figure\d+\.py)"))) continue;
+    ++scripts;
+    const auto r = run_shell("/usr/bin/python3 '" + entry.path().string() + "' '" +
+                             dir.path().string() + "'");
+    EXPECT_NE(r.code, 0) << name << " drew something without data";
+    EXPECT_TRUE(r.err.find(".csv") != std::string::npos ||
+                r.err.find("results.json") != std::string::npos)
+        << name << " does not name the missing file: " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / (name.substr(0, name.size() - 3) + ".png")))
+        << name;
+  }
+  if (scripts == 0) GTEST_SKIP() << "no figure scripts yet";
+}
+
+}  // namespace

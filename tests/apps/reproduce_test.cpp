@@ -1,0 +1,170 @@
+// `implicit reproduce --quick`: the report, results.json and the table and figure files.
+//
+// Experiments that fail are allowed (the report must then say so), but every experiment that
+// succeeded must have produced its tables and figures. With IMPLICIT_REQUIRE_ALL set in the
+// environment, every experiment and every figure must succeed and the exit code must be 0.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/cli_runner.hpp"
+
+namespace {
+
+using implicit::test::read_file;
+using implicit::test::run_cli;
+using implicit::test::TempDir;
+using nlohmann::json;
+
+bool require_all() {
+  const char* v = std::getenv("IMPLICIT_REQUIRE_ALL");
+  return v && *v && std::string(v) != "0";
+}
+
+// Which figures and table files each experiment produces.
+const std::map<std::string, std::vector<int>> kFigures = {
+    {"slit", {1, 2}}, {"arm", {4}}, {"himmelblau", {5}}, {"mcl", {6}}, {"slam", {7}}};
+const std::map<std::string, std::string> kTables = {{"slit", "table2_slit.csv"},
+                                                    {"himmelblau", "table4_himmelblau.csv"},
+                                                    {"mcl", "table5_mcl.csv"},
+                                                    {"slam", "table6_slam.csv"}};
+
+int data_rows(const std::filesystem::path& csv) {
+  const std::string text = read_file(csv);
+  int lines = 0;
+  for (char c : text) lines += c == '\n';
+  return lines - 1;  // minus the header
+}
+
+// One test for the whole quick run: ctest starts every TEST in its own process, so splitting it
+// would run the experiments once per test.
+TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperiment) {
+  TempDir dir("reproduce_quick");
+  const auto r = run_cli("reproduce --quick --threads 2 --out '" + dir.path().string() + "'");
+  ASSERT_TRUE(r.code == 0 || r.code == 3) << "exit " << r.code << "\n" << r.err;
+  if (require_all()) {
+    EXPECT_EQ(r.code, 0) << r.err;
+  }
+
+  for (const char* f : {"report.md", "report.html", "results.json", "table2_slit.csv",
+                        "table5_mcl.csv", "table6_slam.csv"})
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / f)) << f;
+
+  json results;
+  ASSERT_NO_THROW(results = json::parse(read_file(dir.path() / "results.json")));
+  for (const char* key : {"version", "commit", "compiler", "build_type", "cxx_flags", "cpu_model",
+                          "hardware_threads", "threads", "seed", "quick", "command", "settings",
+                          "experiments", "figures", "paper", "reference", "seconds_total"})
+    EXPECT_TRUE(results.contains(key)) << key;
+  EXPECT_EQ(results["quick"], true);
+  EXPECT_EQ(results["seed"], 1);
+  EXPECT_EQ(results["threads"], 2);
+
+  const std::string md = read_file(dir.path() / "report.md");
+  const std::string html = read_file(dir.path() / "report.html");
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  EXPECT_NE(html.find("</html>"), std::string::npos);
+  for (const char* heading : {"Table 2", "Table 4", "Table 5", "Table 6", "Summary",
+                              "How to repeat this run"}) {
+    EXPECT_NE(md.find(heading), std::string::npos) << heading;
+    EXPECT_NE(html.find(heading), std::string::npos) << heading;
+  }
+  std::size_t differs = 0;
+  for (auto p = md.find("What differs from the paper and why"); p != std::string::npos;
+       p = md.find("What differs from the paper and why", p + 1))
+    ++differs;
+  EXPECT_EQ(differs, 5u) << "one section per experiment";
+  // The paper's numbers are in the report whatever happened to our runs.
+  for (const char* paper_value : {"2.64 ± 0.63", "4.46 ± 2.17", "178.34", "2.87", "23.4", "2.98"})
+    EXPECT_NE(md.find(paper_value), std::string::npos) << paper_value;
+
+  for (const auto& [name, figures] : kFigures) {
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(results["experiments"].contains(name));
+    const auto& e = results["experiments"][name];
+    const std::string status = e.value("status", "");
+    EXPECT_TRUE(status == "ok" || status == "partial" || status == "failed") << status;
+    EXPECT_TRUE(e["seconds"].is_number());
+    ASSERT_TRUE(e["runs"].is_array());
+    EXPECT_FALSE(e["runs"].empty());
+    for (const auto& run : e["runs"]) {
+      EXPECT_TRUE(run.contains("settings") && run.contains("seconds") && run.contains("label"));
+      if (run["status"] == "ok") {
+        EXPECT_TRUE(run["result"].is_object()) << run["label"];
+      } else {
+        EXPECT_FALSE(run.value("error", "").empty()) << run["label"];
+      }
+    }
+    if (require_all()) {
+      EXPECT_EQ(status, "ok") << e["runs"][0].value("error", "");
+    }
+    if (status == "failed") {
+      // The report marks it failed, with the error.
+      EXPECT_NE(md.find("**Status: failed.**"), std::string::npos);
+      EXPECT_NE(md.find(e["runs"][0].value("error", "?")), std::string::npos);
+      continue;
+    }
+    if (kTables.count(name)) {
+      const auto table = dir.path() / kTables.at(name);
+      ASSERT_TRUE(std::filesystem::exists(table)) << table;
+      EXPECT_GE(data_rows(table), 1) << table;
+    }
+    for (int n : figures) {
+      const std::string key = "figure" + std::to_string(n);
+      const auto& f = results["figures"][key];
+      EXPECT_EQ(f.value("status", ""), "ok") << key << ": " << f.value("error", "");
+      EXPECT_TRUE(std::filesystem::exists(dir.path() / (key + ".png"))) << key;
+      EXPECT_TRUE(std::filesystem::exists(dir.path() / (key + ".svg"))) << key;
+      EXPECT_NE(html.find("<img src=\"" + key + ".png\""), std::string::npos) << key;
+    }
+  }
+
+  // The report can be rebuilt from results.json alone.
+  std::filesystem::remove(dir.path() / "report.md");
+  const auto again = run_cli("reproduce --report-only --no-figures --quiet --out '" +
+                             dir.path().string() + "'");
+  EXPECT_TRUE(again.code == 0 || again.code == 3) << again.err;
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "report.md"));
+}
+
+// --json: stdout is exactly results.json's content, stderr stays empty; a subset with --only
+// marks the others skipped.
+TEST(Reproduce, JsonModePrintsResultsAndNothingElse) {
+  TempDir dir("reproduce_json");
+  const auto r =
+      run_cli("reproduce --quick --only arm --no-figures --json --out '" + dir.path().string() + "'");
+  ASSERT_TRUE(r.code == 0 || r.code == 3) << r.err;
+  EXPECT_EQ(r.err, "");
+  json printed, written;
+  ASSERT_NO_THROW(printed = json::parse(r.out)) << r.out;
+  ASSERT_NO_THROW(written = json::parse(read_file(dir.path() / "results.json")));
+  EXPECT_EQ(printed, written);
+  EXPECT_EQ(printed["experiments"]["slit"]["status"], "skipped");
+  EXPECT_EQ(printed["figures"]["figure4"]["status"], "skipped");
+  EXPECT_NE(printed["experiments"]["arm"]["status"], "skipped");
+}
+
+// A missing plot script marks its figure failed (exit code 3) but the report is still written.
+TEST(Reproduce, MissingPlotScriptsFailTheFigureNotTheReport) {
+  TempDir dir("reproduce_noplots");
+  const auto r = run_cli("reproduce --quick --only arm --quiet --out '" + dir.path().string() +
+                         "'");
+  ASSERT_TRUE(r.code == 0 || r.code == 3) << r.err;
+  setenv("IMPLICIT_PLOTS_DIR", (dir.path() / "no-such-folder").c_str(), 1);
+  const auto again = run_cli("reproduce --report-only --quiet --out '" + dir.path().string() + "'");
+  unsetenv("IMPLICIT_PLOTS_DIR");
+  EXPECT_EQ(again.code, 3) << again.err;
+  const json results = json::parse(read_file(dir.path() / "results.json"));
+  EXPECT_EQ(results["figures"]["figure4"]["status"], "failed");
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "report.html"));
+  const std::string md = read_file(dir.path() / "report.md");
+  EXPECT_NE(md.find("Figure 4 missing"), std::string::npos);
+}
+
+}  // namespace
