@@ -87,7 +87,7 @@ Plan make_plan(bool quick, const std::vector<std::string>& only) {
   Plan plan;
   if (selected("slit")) {
     const std::vector<int> ms = {10, 50, 100, 500};
-    const int runs = quick ? 20 : 500;
+    const int runs = quick ? 100 : 500;
     plan.settings["slit"] = {{"modes", {"paper", "corrected"}},
                              {"samples", ms},
                              {"runs", runs},

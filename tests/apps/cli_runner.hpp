@@ -46,8 +46,9 @@ class TempDir {
 
 inline CommandResult run_shell(const std::string& command) {
   static int counter = 0;
-  const auto base = std::filesystem::temp_directory_path() /
-                    ("implicit_cmd_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  const auto base =
+      std::filesystem::temp_directory_path() /
+      ("implicit_cmd_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
   const std::string out = base.string() + ".out", err = base.string() + ".err";
   const int raw = std::system((command + " > '" + out + "' 2> '" + err + "'").c_str());
   CommandResult r;

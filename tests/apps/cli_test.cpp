@@ -21,7 +21,8 @@ using implicit::test::TempDir;
 TEST(Cli, VersionPrintsVersionAndCommit) {
   const auto r = run_cli("--version");
   EXPECT_EQ(r.code, 0) << r.err;
-  EXPECT_TRUE(std::regex_search(r.out, std::regex(R"(implicit \d+\.\d+\.\d+ \(commit [0-9a-z]+\))")))
+  EXPECT_TRUE(
+      std::regex_search(r.out, std::regex(R"(implicit \d+\.\d+\.\d+ \(commit [0-9a-z]+\))")))
       << r.out;
 }
 
@@ -92,26 +93,26 @@ TEST(Cli, EverySubcommandHasTheCommonOptionsAndExamples) {
 // python/plots/common.py: missing file, missing column, bad number and short row each fail with
 // exit code 1 and a message naming file, line and column.
 TEST(PlotHelpers, FailLoudlyOnMissingOrMalformedCsv) {
-  const std::string script =
-      std::string(IMPLICIT_SOURCE_DIR) + "/tests/apps/plots_common_check.py";
+  const std::string script = std::string(IMPLICIT_SOURCE_DIR) + "/tests/apps/plots_common_check.py";
   const std::string plots = std::string(IMPLICIT_SOURCE_DIR) + "/python/plots";
   TempDir dir("plots_common");
-  const auto r = run_shell("/usr/bin/python3 '" + script + "' '" + plots + "' '" +
-                           dir.path().string() + "'");
+  const auto r =
+      run_shell("/usr/bin/python3 '" + script + "' '" + plots + "' '" + dir.path().string() + "'");
   EXPECT_EQ(r.code, 0) << r.out << r.err;
 }
 
 // Each figure script fails (non-zero exit, names the missing file) on a folder without data.
 TEST(PlotHelpers, EveryFigureScriptFailsLoudlyWithoutData) {
-  const std::filesystem::path plots = std::filesystem::path(IMPLICIT_SOURCE_DIR) / "python" / "plots";
+  const std::filesystem::path plots =
+      std::filesystem::path(IMPLICIT_SOURCE_DIR) / "python" / "plots";
   TempDir dir("plots_empty");
   int scripts = 0;
   for (const auto& entry : std::filesystem::directory_iterator(plots)) {
     const auto name = entry.path().filename().string();
     if (!std::regex_match(name, std::regex(R"(figure\d+\.py)"))) continue;
     ++scripts;
-    const auto r = run_shell("/usr/bin/python3 '" + entry.path().string() + "' '" +
-                             dir.path().string() + "'");
+    const auto r =
+        run_shell("/usr/bin/python3 '" + entry.path().string() + "' '" + dir.path().string() + "'");
     EXPECT_NE(r.code, 0) << name << " drew something without data";
     EXPECT_TRUE(r.err.find(".csv") != std::string::npos ||
                 r.err.find("results.json") != std::string::npos)

@@ -70,8 +70,8 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
   const std::string html = read_file(dir.path() / "report.html");
   EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
   EXPECT_NE(html.find("</html>"), std::string::npos);
-  for (const char* heading : {"Table 2", "Table 4", "Table 5", "Table 6", "Summary",
-                              "How to repeat this run"}) {
+  for (const char* heading :
+       {"Table 2", "Table 4", "Table 5", "Table 6", "Summary", "How to repeat this run"}) {
     EXPECT_NE(md.find(heading), std::string::npos) << heading;
     EXPECT_NE(html.find(heading), std::string::npos) << heading;
   }
@@ -127,8 +127,8 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
 
   // The report can be rebuilt from results.json alone.
   std::filesystem::remove(dir.path() / "report.md");
-  const auto again = run_cli("reproduce --report-only --no-figures --quiet --out '" +
-                             dir.path().string() + "'");
+  const auto again =
+      run_cli("reproduce --report-only --no-figures --quiet --out '" + dir.path().string() + "'");
   EXPECT_TRUE(again.code == 0 || again.code == 3) << again.err;
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "report.md"));
 }
@@ -137,8 +137,8 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
 // marks the others skipped.
 TEST(Reproduce, JsonModePrintsResultsAndNothingElse) {
   TempDir dir("reproduce_json");
-  const auto r =
-      run_cli("reproduce --quick --only arm --no-figures --json --out '" + dir.path().string() + "'");
+  const auto r = run_cli("reproduce --quick --only arm --no-figures --json --out '" +
+                         dir.path().string() + "'");
   ASSERT_TRUE(r.code == 0 || r.code == 3) << r.err;
   EXPECT_EQ(r.err, "");
   json printed, written;
@@ -153,8 +153,8 @@ TEST(Reproduce, JsonModePrintsResultsAndNothingElse) {
 // A missing plot script marks its figure failed (exit code 3) but the report is still written.
 TEST(Reproduce, MissingPlotScriptsFailTheFigureNotTheReport) {
   TempDir dir("reproduce_noplots");
-  const auto r = run_cli("reproduce --quick --only arm --quiet --out '" + dir.path().string() +
-                         "'");
+  const auto r =
+      run_cli("reproduce --quick --only arm --quiet --out '" + dir.path().string() + "'");
   ASSERT_TRUE(r.code == 0 || r.code == 3) << r.err;
   setenv("IMPLICIT_PLOTS_DIR", (dir.path() / "no-such-folder").c_str(), 1);
   const auto again = run_cli("reproduce --report-only --quiet --out '" + dir.path().string() + "'");
