@@ -60,6 +60,11 @@ struct SlamSettings {
   std::string association = "known";  ///< "ml" or "known"
   std::string truth = "paper";      ///< "paper" (noise-free) or "consistent"
   int laser_every = 1;              ///< laser update every k-th motion step
+  double consistent_noise_scale = 0.01;  ///< Sigma1 factor of truth and filters in "consistent"
+  int dense_landmarks = 0;          ///< > 0: a dense field of this many landmarks (scaling)
+  int dense_laps = 1;               ///< route length of the dense field, in Car Park laps
+  double min_range = 0.0;           ///< detections closer than this are ignored [m]
+  double control_noise = 0.5;       ///< P = diag(p, p) of the filters' motion model
 };
 /// Keys: method, particles, datasets, error_percent_mean/std, error_aligned_percent_mean,
 /// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_map_m, nees_mean (consistent mode),

@@ -19,6 +19,7 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/robot/log_format.hpp"
 
 namespace implicit::slam {
 namespace {
@@ -338,145 +339,139 @@ std::vector<Pose> read_reference_trace(const std::filesystem::path& path) {
   return out;
 }
 
-// ---- plain-text SLAM log ------------------------------------------------------------------
-// One record per line, whitespace separated; '#' starts a comment. Records:
-//   vehicle <dt> <L> <H> <a> <b>          geometry (once, before any step)
-//   initial <x> <y> <beta>                initial pose (once)
-//   landmark <id> <east> <north>          true landmark (optional, ids 0..K-1 in order)
-//   u <n> <vc> <alpha>                    control of step n (n = 1, 2, ... consecutive)
-//   z <n> <range> <bearing> <id>          detection at step n (id -1 = unknown)
-//   truth <n> <x> <y> <beta|nan>          true pose (or position) after step n (optional)
-SlamDataset read_slam_log(const std::filesystem::path& path) {
-  const auto lines = read_text_lines(path);
-  SlamDataset d;
-  d.name = path.filename().string();
-  for (const char* ext : {".gz", ".txt", ".log"})
-    if (d.name.size() > std::strlen(ext) && d.name.ends_with(ext))
-      d.name.resize(d.name.size() - std::strlen(ext));
-  SlamDatasetBuilder b(d);
-  bool have_initial = false;
-  std::map<std::size_t, Pose> truth;
+// ---- the plain-text robot log (implicit/robot/log_format.hpp) ----------------------------
+namespace {
+// Optional geometry comment: "# vehicle dt=0.025 L=2.83 H=0.76 a=0.95 b=0.5" (other readers
+// ignore comments; the Car Park values are the default).
+robot::UteParams vehicle_from_comments(const std::vector<std::string>& lines,
+                                       const std::filesystem::path& path) {
+  robot::UteParams v;
   for (std::size_t i = 0; i < lines.size(); ++i) {
-    const std::size_t ln = i + 1;
-    std::string line = lines[i];
-    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
-    const auto f = split_ws(line);
-    if (f.empty()) continue;
-    const std::string& kind = f[0];
-    auto need = [&](std::size_t k) {
-      if (f.size() != k)
-        throw ParseError(fmt::format("{}:{}: record '{}': expected {} fields, got {}",
-                                     path.string(), ln, kind, k, f.size()));
-    };
-    if (kind == "vehicle") {
-      need(6);
-      d.vehicle.dt = to_double(f[1], path, ln, "dt");
-      d.vehicle.wheelbase = to_double(f[2], path, ln, "L");
-      d.vehicle.encoder_offset = to_double(f[3], path, ln, "H");
-      d.vehicle.laser_forward = to_double(f[4], path, ln, "a");
-      d.vehicle.laser_left = to_double(f[5], path, ln, "b");
-      d.vehicle.validate();
-    } else if (kind == "initial") {
-      need(4);
-      d.initial_pose = Pose(to_double(f[1], path, ln, "x"), to_double(f[2], path, ln, "y"),
-                            to_double(f[3], path, ln, "beta"));
-      have_initial = true;
-    } else if (kind == "landmark") {
-      need(4);
-      const long id = to_int(f[1], path, ln, "id");
-      if (id != static_cast<long>(d.landmarks.size()))
-        throw ParseError(fmt::format("{}:{}: landmark id: expected {}, got {}", path.string(), ln,
-                                     d.landmarks.size(), id));
-      d.landmarks.emplace_back(to_double(f[2], path, ln, "east"),
-                               to_double(f[3], path, ln, "north"));
-    } else if (kind == "u") {
-      need(4);
-      const long n = to_int(f[1], path, ln, "n");
-      if (n != static_cast<long>(d.steps() + 1))
-        throw ParseError(fmt::format("{}:{}: step number: expected {}, got {}", path.string(), ln,
-                                     d.steps() + 1, n));
-      b.begin_step(Control(to_double(f[2], path, ln, "vc"), to_double(f[3], path, ln, "alpha")));
-    } else if (kind == "z") {
-      need(5);
-      const long n = to_int(f[1], path, ln, "n");
-      if (n != static_cast<long>(d.steps()) || n == 0)
-        throw ParseError(fmt::format(
-            "{}:{}: detection step: expected the current step {} (after its 'u' record), got {}",
-            path.string(), ln, d.steps(), n));
-      Observation o;
-      o.z = Measurement(to_double(f[2], path, ln, "range"), to_double(f[3], path, ln, "bearing"));
-      o.landmark = static_cast<int>(to_int(f[4], path, ln, "id"));
-      if (!o.z.allFinite() || o.z(0) <= 0.0)
-        throw ParseError(fmt::format(
-            "{}:{}: detection: expected a finite positive range and finite bearing, got ({}, {})",
-            path.string(), ln, o.z(0), o.z(1)));
-      b.add_observation(o);
-    } else if (kind == "truth") {
-      need(5);
-      const long n = to_int(f[1], path, ln, "n");
-      if (n < 0)
-        throw ParseError(
-            fmt::format("{}:{}: truth step: expected n >= 0, got {}", path.string(), ln, n));
-      const Pose x(to_double(f[2], path, ln, "x"), to_double(f[3], path, ln, "y"),
-                   to_double(f[4], path, ln, "beta"));
-      if (!std::isfinite(x(2))) d.truth_has_heading = false;
-      truth[static_cast<std::size_t>(n)] = x;
-    } else {
-      throw ParseError(
-          fmt::format("{}:{}: expected a record vehicle|initial|landmark|u|z|truth, got '{}'",
-                      path.string(), ln, kind));
+    const auto f = split_ws(lines[i]);
+    if (f.size() < 2 || f[0] != "#" || f[1] != "vehicle") continue;
+    for (std::size_t k = 2; k < f.size(); ++k) {
+      const auto eq = f[k].find('=');
+      if (eq == std::string::npos)
+        throw ParseError(fmt::format("{}:{}: vehicle comment: expected key=value, got '{}'",
+                                     path.string(), i + 1, f[k]));
+      const std::string key = f[k].substr(0, eq);
+      const double val = to_double(f[k].substr(eq + 1), path, i + 1, key);
+      if (key == "dt")
+        v.dt = val;
+      else if (key == "L")
+        v.wheelbase = val;
+      else if (key == "H")
+        v.encoder_offset = val;
+      else if (key == "a")
+        v.laser_forward = val;
+      else if (key == "b")
+        v.laser_left = val;
+      else
+        throw ParseError(fmt::format("{}:{}: vehicle comment: expected dt|L|H|a|b, got '{}'",
+                                     path.string(), i + 1, key));
     }
   }
-  if (!have_initial)
-    throw ParseError(fmt::format("{}: expected an 'initial' record, got none", path.string()));
-  if (d.steps() == 0)
-    throw ParseError(fmt::format("{}: expected at least one 'u' record, got none", path.string()));
-  if (!truth.empty()) {
+  v.validate();
+  return v;
+}
+}  // namespace
+
+SlamDataset dataset_from_robot_log(const robot::RobotLog& log, const robot::UteParams& vehicle,
+                                   const std::string& name) {
+  require(log.initial.has_value(), "log '{}': expected an 'initial' record for SLAM, got none",
+          name);
+  SlamDataset d;
+  d.name = name;
+  d.vehicle = vehicle;
+  d.initial_pose = log.initial->mean;
+  // Known ids become indices 0..K-1 in the order of the landmark records.
+  for (std::size_t k = 0; k < log.landmarks.size(); ++k)
+    d.landmarks.push_back(log.landmarks.position(k));
+  const auto schedule = robot::make_schedule(log, log.initial->time, 0.5 * vehicle.dt);
+  SlamDatasetBuilder b(d);
+  for (const auto& st : schedule.steps) {
+    b.begin_step(st.u);
+    if (st.scan < 0) continue;
+    for (const auto& o : log.scans[static_cast<std::size_t>(st.scan)].observations) {
+      Observation obs;
+      obs.z = o.z;
+      obs.landmark = o.landmark_id >= 0 ? log.landmarks.index_of(o.landmark_id) : -1;
+      b.add_observation(obs);
+    }
+  }
+  if (!log.truth.empty()) {
+    const auto track = robot::interpolate_truth(log, schedule);
     d.truth.assign(d.steps() + 1, Pose::Constant(std::numeric_limits<double>::quiet_NaN()));
     d.truth_valid.assign(d.steps() + 1, 0);
-    for (const auto& [n, x] : truth) {
-      if (n > d.steps())
-        throw ParseError(fmt::format("{}: truth step: expected at most {}, got {}", path.string(),
-                                     d.steps(), n));
-      d.truth[n] = x;
+    d.truth_has_heading = true;
+    for (std::size_t n = 1; n <= d.steps(); ++n) {
+      const auto& p = track.position[n - 1];
+      if (!p.allFinite()) continue;
+      d.truth[n] = Pose(p(0), p(1), track.heading[n - 1]);
       d.truth_valid[n] = 1;
+      if (!std::isfinite(track.heading[n - 1])) d.truth_has_heading = false;
     }
   }
   d.validate();
   return d;
 }
 
+SlamDataset read_slam_log(const std::filesystem::path& path) {
+  const auto lines = read_text_lines(path);
+  const robot::UteParams vehicle = vehicle_from_comments(lines, path);
+  std::string text;
+  for (const auto& l : lines) {
+    text += l;
+    text += '\n';
+  }
+  std::istringstream in(text);
+  const robot::RobotLog log = robot::parse_robot_log(in, path.string());
+  std::string name = path.filename().string();
+  for (const char* ext : {".gz", ".txt", ".log"})
+    if (name.size() > std::strlen(ext) && name.ends_with(ext))
+      name.resize(name.size() - std::strlen(ext));
+  return dataset_from_robot_log(log, vehicle, name);
+}
+
 void write_slam_log(const SlamDataset& d, const std::filesystem::path& path) {
-  const bool gz = path.extension() == ".gz";
-  std::string out;
-  out += "# implicit plain-text SLAM log (see data/victoria_park/README.md for the format)\n";
-  out += fmt::format("vehicle {} {} {} {} {}\n", d.vehicle.dt, d.vehicle.wheelbase,
-                     d.vehicle.encoder_offset, d.vehicle.laser_forward, d.vehicle.laser_left);
-  out += fmt::format("initial {} {} {}\n", d.initial_pose(0), d.initial_pose(1), d.initial_pose(2));
+  robot::RobotLog log;
   for (std::size_t k = 0; k < d.landmarks.size(); ++k)
-    out += fmt::format("landmark {} {} {}\n", k, d.landmarks[k](0), d.landmarks[k](1));
+    log.landmarks.add(static_cast<int>(k), d.landmarks[k]);
+  const double dt = d.vehicle.dt;
+  log.initial = robot::PosePrior{0.0, d.initial_pose, Vec<3>::Zero()};
   for (std::size_t n = 1; n <= d.steps(); ++n) {
-    out += fmt::format("u {} {} {}\n", n, d.control(n)(0), d.control(n)(1));
-    for (const Observation& o : d.observations(n))
-      out += fmt::format("z {} {} {} {}\n", n, o.z(0), o.z(1), o.landmark);
+    const double t = dt * static_cast<double>(n);
+    log.controls.push_back({t, d.control(n)});
+    const auto obs = d.observations(n);
+    if (!obs.empty()) {
+      robot::ObservationSet set;
+      set.time = t;
+      for (const auto& o : obs) set.observations.push_back({o.z, o.landmark});
+      log.scans.push_back(std::move(set));
+    }
     if (d.has_truth(n)) {
-      const Pose& x = d.truth[n];
-      if (d.truth_has_heading)
-        out += fmt::format("truth {} {} {} {}\n", n, x(0), x(1), x(2));
-      else
-        out += fmt::format("truth {} {} {} nan\n", n, x(0), x(1));
+      robot::TruthRecord r;
+      r.time = t;
+      r.position = d.truth[n].head<2>();
+      if (d.truth_has_heading) r.heading = d.truth[n](2);
+      log.truth.push_back(r);
     }
   }
-  if (gz) {
+  std::ostringstream out;
+  out << fmt::format("# vehicle dt={} L={} H={} a={} b={}\n", d.vehicle.dt, d.vehicle.wheelbase,
+                     d.vehicle.encoder_offset, d.vehicle.laser_forward, d.vehicle.laser_left);
+  robot::write_robot_log(out, log);
+  const std::string text = out.str();
+  if (path.extension() == ".gz") {
     gzFile f = gzopen(path.string().c_str(), "wb9");
     require(f != nullptr, "{}: expected a writable path", path.string());
-    const int wrote = gzwrite(f, out.data(), static_cast<unsigned>(out.size()));
+    const int wrote = gzwrite(f, text.data(), static_cast<unsigned>(text.size()));
     gzclose(f);
-    require(wrote == static_cast<int>(out.size()), "{}: write failed", path.string());
+    require(wrote == static_cast<int>(text.size()), "{}: write failed", path.string());
   } else {
     std::ofstream os(path);
     require(static_cast<bool>(os), "{}: expected a writable path", path.string());
-    os << out;
+    os << text;
   }
 }
 

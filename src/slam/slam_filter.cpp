@@ -13,6 +13,7 @@
 #include "implicit/core/resampling.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/robot/data_association.hpp"
 #include "implicit/slam/ekf_slam.hpp"
 #include "implicit/slam/landmark_map.hpp"
 #include "implicit/slam/proposals.hpp"
@@ -127,22 +128,18 @@ class EkfSlamFilter final : public SlamFilter {
         const auto id = static_cast<std::size_t>(o.landmark);
         if (id < slot_of_id_.size()) slot = slot_of_id_[id];
       } else {
-        double best = std::numeric_limits<double>::infinity();
-        for (int k = 0; k < core_.landmark_count(); ++k) {
-          const Landmark m = core_.landmark(k);
-          const Measurement e = RangeBearingSensor::residual(s.predict(xp, m), o.z);
-          const Eigen::LLT<Mat<2>> llt(core_.innovation_covariance(k, s.jacobian_pose(xp, m),
-                                                                   s.jacobian_landmark(xp, m), r));
-          if (llt.info() != Eigen::Success) continue;
-          const double d2 = e.dot(llt.solve(e));
-          if (d2 > opt_.gate_chi2) continue;
-          const Mat<2> l = llt.matrixL();
-          const double cost = d2 + 2.0 * (std::log(l(0, 0)) + std::log(l(1, 1)));
-          if (cost < best) {
-            best = cost;
-            slot = k;
-          }
-        }
+        // One shared ML rule (robot/data_association.hpp): min d^2 + log det S inside the gate.
+        slot = robot::associate_max_likelihood(
+                   core_.landmark_count(),
+                   [&](int k, Measurement& e, Mat<2>& sk) {
+                     const Landmark m = core_.landmark(k);
+                     e = RangeBearingSensor::residual(s.predict(xp, m), o.z);
+                     sk = core_.innovation_covariance(k, s.jacobian_pose(xp, m),
+                                                      s.jacobian_landmark(xp, m), r);
+                     return true;
+                   },
+                   opt_.gate_chi2)
+                   .index;
       }
       if (slot < 0) {
         const Landmark m = RangeBearingSensor::inverse(xp, o.z);
@@ -397,33 +394,27 @@ class ParticleSlamFilter final : public SlamFilter {
           known.push_back({slot, obs[i].z, p.map.get(slot)});
         continue;
       }
-      double best = std::numeric_limits<double>::infinity();
-      std::size_t best_slot = 0;
-      bool found = false;
-      p.map.for_each([&](std::size_t k, const LandmarkEstimate& l) {
-        const double dx = l.mean(0) - f(0), dy = l.mean(1) - f(1);
-        const double range = std::sqrt(dx * dx + dy * dy);
-        if (std::abs(range - obs[i].z(0)) > 10.0 + 0.5 * obs[i].z(0)) return;  // cheap pre-gate
-        const Measurement e = RangeBearingSensor::residual(s.predict(f, l.mean), obs[i].z);
-        const Mat23 hx = s.jacobian_pose(f, l.mean);
-        const Mat<2> hm = -hx.leftCols<2>();
-        const Mat<2> sk = hx * sigma1 * hx.transpose() + hm * l.cov * hm.transpose() + r;
-        const Eigen::LLT<Mat<2>> llt(sk);
-        if (llt.info() != Eigen::Success) return;
-        const double d2 = e.dot(llt.solve(e));
-        if (!(d2 <= opt_.gate_chi2)) return;
-        const Mat<2> l2 = llt.matrixL();
-        const double cost = d2 + 2.0 * (std::log(l2(0, 0)) + std::log(l2(1, 1)));
-        if (cost < best) {
-          best = cost;
-          best_slot = k;
-          found = true;
-        }
-      });
-      if (found)
-        known.push_back({best_slot, obs[i].z, p.map.get(best_slot)});
-      else
+      const auto a = robot::associate_max_likelihood(
+          static_cast<int>(p.map.size()),
+          [&](int k, Measurement& e, Mat<2>& sk) {
+            const LandmarkEstimate& l = p.map.get(static_cast<std::size_t>(k));
+            const double dx = l.mean(0) - f(0), dy = l.mean(1) - f(1);
+            // Cheap pre-gate: a landmark whose range differs grossly cannot pass chi^2 = 9.21.
+            if (std::abs(std::sqrt(dx * dx + dy * dy) - obs[i].z(0)) > 10.0 + 0.5 * obs[i].z(0))
+              return false;
+            e = RangeBearingSensor::residual(s.predict(f, l.mean), obs[i].z);
+            const Mat23 hx = s.jacobian_pose(f, l.mean);
+            const Mat<2> hm = -hx.leftCols<2>();
+            sk = hx * sigma1 * hx.transpose() + hm * l.cov * hm.transpose() + r;
+            return true;
+          },
+          opt_.gate_chi2);
+      if (a.matched()) {
+        const auto slot = static_cast<std::size_t>(a.index);
+        known.push_back({slot, obs[i].z, p.map.get(slot)});
+      } else {
         fresh.push_back(obs[i].z);
+      }
     }
 
     const bool point_landmarks = opt_.method == SlamMethod::kImplicit;
@@ -519,9 +510,9 @@ class ParticleSlamFilter final : public SlamFilter {
         ok = ok && terms[i].set(k.landmark.mean, k.z, sk);
       }
       const PoseObjective F(f, sigma1, terms);
-      const PoseLaplace lp =
-          ok ? minimize_pose_objective(F, f, opt_.newton_max_iterations, opt_.newton_step_tolerance)
-             : PoseLaplace{};
+      const PoseLaplace lp = ok ? minimize_pose_objective(F, f, opt_.newton_max_iterations,
+                                                          opt_.newton_decrement_tolerance)
+                                : PoseLaplace{};
       oc.newton_iterations += lp.iterations;
       ++oc.newton_solves;
       if (!lp.converged) ++oc.newton_not_converged;

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "implicit/robot/log_format.hpp"
 #include "implicit/robot/range_bearing.hpp"
 #include "implicit/robot/ute_model.hpp"
 
@@ -136,10 +137,17 @@ SlamDataset read_reference_csv(const std::filesystem::path& path,
 /// Reads a reference EKF trace (n,x_hat,y_hat,beta_hat), returning N+1 poses.
 std::vector<Pose> read_reference_trace(const std::filesystem::path& path);
 
-/// Reads a plain-text SLAM log (gzip or plain; format in data/victoria_park/README.md).
+/// A data set from a plain-text robot log (implicit/robot/log_format.hpp): every control at or
+/// after the `initial` time is one step, scans attach to the nearest step (within dt/2), truth is
+/// interpolated to the step times, landmark ids become indices in record order.
+SlamDataset dataset_from_robot_log(const robot::RobotLog& log, const robot::UteParams& vehicle,
+                                   const std::string& name);
+
+/// Reads a robot log (plain or gzip). The vehicle geometry comes from an optional comment line
+/// "# vehicle dt=0.025 L=2.83 H=0.76 a=0.95 b=0.5" (Car Park values when absent).
 SlamDataset read_slam_log(const std::filesystem::path& path);
 
-/// Writes a data set as a plain-text SLAM log (the format read_slam_log reads).
+/// Writes a data set as a robot log (step n at time n dt; gzip when the name ends in .gz).
 void write_slam_log(const SlamDataset& d, const std::filesystem::path& path);
 
 /// All lines of a text file, transparently gunzipped when it is gzip-compressed. Throws

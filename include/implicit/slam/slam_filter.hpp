@@ -67,7 +67,7 @@ struct SlamOptions {
   double resample_threshold = 0.5;  ///< resample (systematic) when ESS < threshold * M
   double min_range = 0.0;  ///< detections closer than this are ignored (counted as skipped)
   int newton_max_iterations = 20;
-  double newton_step_tolerance = 1e-9;  ///< stop when max|step| < this [m, rad]
+  double newton_decrement_tolerance = 1e-10;  ///< stop when g^T H^-1 g < this
 
   /// Throws InvalidArgument naming the offending field.
   void validate() const;

@@ -1,0 +1,96 @@
+// `implicit slam`: EKF-SLAM, FastSLAM 1.0/2.0 and implicit SLAM (paper §4.2, Table 6, Figure 7).
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "context.hpp"
+#include "experiments.hpp"
+#include "implicit/core/parallel.hpp"
+#include "registry.hpp"
+
+namespace implicit::app {
+namespace {
+
+struct SlamCommand {
+  SlamSettings settings;
+  RunContext ctx;
+};
+
+void setup_slam(CLI::App& sub) {
+  auto cmd = std::make_shared<SlamCommand>();
+  auto& s = cmd->settings;
+  sub.add_option("--method", s.method,
+                 "ekf | fastslam1 | fastslam2 | implicit (paper, point landmarks) | implicit-rb "
+                 "(Rao-Blackwellised)")
+      ->check(CLI::IsMember({"ekf", "fastslam1", "fastslam2", "implicit", "implicit-rb"}))
+      ->capture_default_str();
+  sub.add_option("--particles,-M", s.particles, "Particles M (ignored by ekf)")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  sub.add_option("--datasets", s.datasets,
+                 "Data sets (synthetic seeds seed, seed+1, ...; with --data: repeated runs)")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  sub.add_option("--data", s.data_dir,
+                 "Plain-text robot log (or a folder of *.log[.gz]) instead of synthetic data, e.g. "
+                 "data/victoria_park/victoria_park.log.gz");
+  sub.add_option("--association", s.association,
+                 "known: true landmark ids; ml: maximum likelihood with a chi-square gate")
+      ->check(CLI::IsMember({"ml", "known"}))
+      ->capture_default_str();
+  sub.add_option("--truth", s.truth,
+                 "paper: noise-free truth (Table 6); consistent: truth sampled from the model "
+                 "(NEES)")
+      ->check(CLI::IsMember({"paper", "consistent"}))
+      ->capture_default_str();
+  sub.add_option("--laser-every", s.laser_every, "Synthetic laser every k-th motion step")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  sub.add_option("--noise-scale", s.consistent_noise_scale,
+                 "Sigma1 factor of the consistent truth and the filters")
+      ->check(CLI::Range(1e-6, 1.0))
+      ->capture_default_str();
+  sub.add_option("--control-noise", s.control_noise, "P = diag(p, p) of the motion model")
+      ->check(CLI::Range(1e-6, 10.0))
+      ->capture_default_str();
+  sub.add_option("--dense-landmarks", s.dense_landmarks,
+                 "Synthetic dense landmark field with this many landmarks (0 = the 15 beacons)")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
+  sub.add_option("--dense-laps", s.dense_laps, "Route length of the dense field (laps)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  sub.add_option("--min-range", s.min_range, "Ignore detections closer than this [m]")
+      ->check(CLI::Range(0.0, 100.0))
+      ->capture_default_str();
+  add_common_options(sub, cmd->ctx);
+  set_examples(sub, {"implicit slam --method implicit-rb --particles 100 --datasets 10 --json",
+                     "implicit slam --method ekf --datasets 50 --out out/slam",
+                     "implicit slam --method fastslam2 --association ml --data "
+                     "data/victoria_park/victoria_park.log.gz --datasets 1 --json"});
+  sub.callback([cmd] {
+    ThreadLimit limit(cmd->ctx.threads);
+    const auto r = run_slam(cmd->settings, cmd->ctx);
+    if (cmd->ctx.json) {
+      fmt::print("{}\n", r.dump(2));
+      return;
+    }
+    fmt::print(
+        "SLAM {}, M = {}, {} data sets ({} association):\n"
+        "  err% = {:.2f} ± {:.2f} (aligned {:.2f}), pose RMSE {:.3f} m\n"
+        "  map RMSE {:.3f} m, map shape {:.3f} m, {:.1f} landmarks\n"
+        "  {:.3f} ms CPU per step, peak memory {:.1f} MB, {:.1f} s\n",
+        r["method"].get<std::string>(), r["particles"].get<int>(), r["datasets"].get<int>(),
+        r["association"].get<std::string>(), r["error_percent_mean"].get<double>(),
+        r["error_percent_std"].get<double>(), r["error_aligned_percent_mean"].get<double>(),
+        r["rmse_pose_m"].get<double>(), r["rmse_map_m"].get<double>(),
+        r["map_shape_m"].get<double>(), r["landmarks_mean"].get<double>(),
+        r["cpu_ms_per_step"].get<double>(), r["peak_memory_mb"].get<double>(),
+        r["seconds"].get<double>());
+  });
+}
+
+const Registrar reg{"slam", "Landmark SLAM: EKF, FastSLAM 1.0/2.0, implicit (paper Table 6)",
+                    setup_slam};
+
+}  // namespace
+}  // namespace implicit::app
