@@ -9,10 +9,14 @@ namespace implicit {
 
 std::string_view to_string(ResamplingScheme s) {
   switch (s) {
-    case ResamplingScheme::kMultinomial: return "multinomial";
-    case ResamplingScheme::kSystematic: return "systematic";
-    case ResamplingScheme::kStratified: return "stratified";
-    case ResamplingScheme::kResidual: return "residual";
+    case ResamplingScheme::kMultinomial:
+      return "multinomial";
+    case ResamplingScheme::kSystematic:
+      return "systematic";
+    case ResamplingScheme::kStratified:
+      return "stratified";
+    case ResamplingScheme::kResidual:
+      return "residual";
   }
   return "unknown";
 }
@@ -49,13 +53,17 @@ void validate(std::span<const double> w, std::span<const double> u, std::size_t 
 }
 
 // Inverse CDF for sorted points s_0 <= s_1 <= ... in [0, 1): the ancestor of each point.
-// The last ancestor is clamped so round-off in the cumulative sum never indexes past the end.
+// The ancestor is clamped to the last particle of positive weight, so that round-off in the
+// cumulative sum (which may end slightly below 1) never indexes past the end nor picks a
+// trailing zero-weight particle.
 void inverse_cdf(std::span<const double> w, std::span<const double> sorted_points,
                  std::vector<std::size_t>& out) {
+  std::size_t last = w.size() - 1;
+  while (last > 0 && !(w[last] > 0.0)) --last;
   std::size_t i = 0;
   double cumulative = w[0];
   for (double s : sorted_points) {
-    while (s >= cumulative && i + 1 < w.size()) cumulative += w[++i];
+    while (s >= cumulative && i < last) cumulative += w[++i];
     out.push_back(i);
   }
 }
@@ -110,8 +118,8 @@ std::vector<std::size_t> resample(ResamplingScheme scheme, std::span<const doubl
   return out;
 }
 
-std::vector<std::size_t> resample(ResamplingScheme scheme, std::span<const double> w,
-                                  std::size_t n, Rng& rng) {
+std::vector<std::size_t> resample(ResamplingScheme scheme, std::span<const double> w, std::size_t n,
+                                  Rng& rng) {
   std::vector<double> u(uniforms_needed(scheme, n));
   for (double& x : u) x = rng.uniform();
   return resample(scheme, w, u, n);
