@@ -1,0 +1,104 @@
+#pragma once
+// Minimising a function by stochastic optimal control (paper §3.3, Table 4, Figure 5; spec §2.6).
+//
+// To minimise f, steer dx = u dt + sqrt(sigma) dW so as to minimise E[f(x(tf)) + integral of
+// R|u|^2/2]: the noise explores valleys that a local optimiser (Newton) cannot leave. Each time
+// step is one receding-horizon path integral control evaluation with implicit sampling over the
+// remaining path y_1..y_n in R^2:
+//
+//   F(y) = sum |y_i - y_{i-1}|^2 / (2 sigma dt) + f(y_n) / gamma,   gamma = sigma R (spec E20).
+//
+// For a fixed end point z = y_n the optimal path is a straight line, so the minimiser comes from
+// the 2-D function G(z) = |z - x|^2/(2 sigma n dt) + f(z)/gamma; the Hessian of F is block
+// tridiagonal (2x2 blocks), factorised in O(n).
+//
+//   implicit::control::HimmelblauProblem pb;                          // R = sigma = 0.01, dt = 1
+//   auto est = implicit::control::himmelblau_control(pb, pb.x0, 0, 50, pb.x0, {.seed = 3});
+//   est.u;   // about (-0.1389649, 0.0358407)
+//
+// Common mistake: forgetting log det L(x) in the finite difference of log psi_hat; unlike the
+// double slit, the Hessian of F depends on x here (through grad^2 f at the end point).
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "implicit/core/banded.hpp"
+#include "implicit/core/minimize.hpp"
+#include "implicit/core/rng.hpp"
+#include "implicit/core/types.hpp"
+
+namespace implicit::control {
+
+/// Himmelblau's function f(x) = (x1^2 + x2 - 11)^2 + (x1 + x2^2 - 7)^2 with analytic gradient
+/// and Hessian (either pointer may be null).
+double himmelblau(const Vec<2>& x, Vec<2>* grad = nullptr, Mat<2>* hess = nullptr);
+
+/// Newton's method on f with full steps (no line search), as in Table 4: x_0..x_iterations.
+std::vector<Vec<2>> himmelblau_newton(const Vec<2>& x0, int iterations);
+
+struct HimmelblauProblem {
+  double control_cost = 0.01;  ///< R (times the identity)
+  double sigma = 0.01;         ///< noise intensity
+  double dt = 1.0;
+  double final_time = 20.0;
+  Vec<2> x0{-1.0, -4.0};
+
+  double gamma() const { return sigma * control_cost; }
+  int num_steps() const;  ///< tf / dt; throws unless a positive integer
+  void validate() const;
+};
+
+/// The Laplace approximation of F at state x with n = K - k steps to go.
+struct HimmelblauLaplace {
+  Vec<2> x = Vec<2>::Zero();    ///< y_0
+  Vec<2> end = Vec<2>::Zero();  ///< z* = mu_n, the minimiser of G
+  double phi = 0.0;             ///< min F = G(z*)
+  int n = 0;
+  BlockTridiagonalCholesky<2> factor;  ///< Cholesky of the Hessian of F at mu
+  double log_det_L = 0.0;
+  MinimizeStatus status = MinimizeStatus::kConverged;
+  /// mu_i = x + (z* - x) i / n, stacked (2n entries).
+  Eigen::VectorXd path() const;
+};
+
+/// Minimises G from `warm` (damped Newton) and factorises the Hessian of F at the minimiser.
+/// If the Hessian is not positive definite the minimiser status says so and a damped Hessian
+/// is factorised instead (the weights stay exact for any SPD H).
+HimmelblauLaplace himmelblau_laplace(const HimmelblauProblem& pb, const Vec<2>& x, int k,
+                                     const Vec<2>& warm);
+
+/// F(y) for the path y (2n entries) from x.
+double himmelblau_path_function(const HimmelblauProblem& pb, const Vec<2>& x,
+                                const Eigen::VectorXd& y);
+
+struct HimmelblauEstimate {
+  Vec<2> u = Vec<2>::Zero();          ///< sigma grad_x log psi_hat (FD-CRN)
+  Vec<2> laplace_u = Vec<2>::Zero();  ///< (z* - x) / (n dt), the Laplace control
+  double log_psi = 0.0;               ///< log psi_hat at x
+  double ess = 0.0;
+  Vec<2> end = Vec<2>::Zero();  ///< z*(x), warm start for the next step
+  double log_det_L = 0.0;
+  MinimizeStatus status = MinimizeStatus::kConverged;  ///< worst over the 5 minimisations
+};
+
+/// One control evaluation at (x, t_k) with M samples (linear map) and FD-CRN in both
+/// coordinates (4 re-minimisations warm-started at z*(x), h = 1e-4 max(1, |x|)).
+HimmelblauEstimate himmelblau_control(const HimmelblauProblem& pb, const Vec<2>& x, int k, int M,
+                                      const Vec<2>& warm, const StreamKey& key);
+
+/// One receding-horizon run: K steps from x0; noise from stream (seed, run, 0, kProcessNoise),
+/// references from (seed, run, k, kReference).
+struct HimmelblauRun {
+  std::vector<Vec<2>> x;  ///< K + 1 states
+  std::vector<Vec<2>> u;  ///< K controls
+  double cost = 0.0;      ///< f(x_K) + sum_k R |u_k|^2 dt / 2
+  double final_f = 0.0;   ///< f(x_K)
+  double ess_mean = 0.0;
+  int failed_minimizations = 0;
+};
+HimmelblauRun simulate_himmelblau_run(const HimmelblauProblem& pb, int M, std::uint64_t seed,
+                                      std::uint64_t run);
+
+}  // namespace implicit::control

@@ -1,0 +1,201 @@
+#include "implicit/control/himmelblau.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/LU>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/target.hpp"
+#include "implicit/core/weights.hpp"
+
+namespace implicit::control {
+
+double himmelblau(const Vec<2>& x, Vec<2>* grad, Mat<2>* hess) {
+  const double a = x(0) * x(0) + x(1) - 11.0;
+  const double b = x(0) + x(1) * x(1) - 7.0;
+  if (grad) *grad << 4.0 * x(0) * a + 2.0 * b, 2.0 * a + 4.0 * x(1) * b;
+  if (hess)
+    *hess << 4.0 * a + 8.0 * x(0) * x(0) + 2.0, 4.0 * (x(0) + x(1)), 4.0 * (x(0) + x(1)),
+        2.0 + 4.0 * b + 8.0 * x(1) * x(1);
+  return a * a + b * b;
+}
+
+std::vector<Vec<2>> himmelblau_newton(const Vec<2>& x0, int iterations) {
+  require(iterations >= 0, "Himmelblau Newton: expected iterations >= 0, got {}", iterations);
+  std::vector<Vec<2>> xs{x0};
+  Vec<2> g;
+  Mat<2> h;
+  for (int i = 0; i < iterations; ++i) {
+    const Vec<2>& x = xs.back();
+    himmelblau(x, &g, &h);
+    // Full Newton steps, as the paper: H may be indefinite (the iteration is attracted by the
+    // saddle), so use a pivoted LU solve rather than Cholesky.
+    xs.push_back(x - h.fullPivLu().solve(g));
+  }
+  return xs;
+}
+
+int HimmelblauProblem::num_steps() const {
+  require(std::isfinite(dt) && dt > 0.0, "Himmelblau problem: expected dt > 0, got {}", dt);
+  const double r = final_time / dt;
+  const double n = std::round(r);
+  require(std::isfinite(r) && std::abs(r - n) <= 1e-9 * std::max(1.0, r) && n >= 1.0,
+          "Himmelblau problem: expected tf to be a positive multiple of dt, got tf / dt = {}", r);
+  return static_cast<int>(n);
+}
+
+void HimmelblauProblem::validate() const {
+  require(std::isfinite(control_cost) && control_cost > 0.0,
+          "Himmelblau problem: expected R > 0, got {}", control_cost);
+  require(std::isfinite(sigma) && sigma > 0.0, "Himmelblau problem: expected sigma > 0, got {}",
+          sigma);
+  require(x0.allFinite(), "Himmelblau problem: expected a finite start point");
+  (void)num_steps();
+}
+
+Eigen::VectorXd HimmelblauLaplace::path() const {
+  Eigen::VectorXd mu(2 * n);
+  for (int i = 1; i <= n; ++i)
+    mu.segment<2>(2 * (i - 1)) = x + (end - x) * (static_cast<double>(i) / n);
+  return mu;
+}
+
+HimmelblauLaplace himmelblau_laplace(const HimmelblauProblem& pb, const Vec<2>& x, int k,
+                                     const Vec<2>& warm) {
+  const int K = pb.num_steps();
+  require(k >= 0 && k < K, "Himmelblau: expected a step in [0, {}), got {}", K, k);
+  require(x.allFinite() && warm.allFinite(), "Himmelblau: expected a finite state and start");
+  const int n = K - k;
+  const double g = pb.gamma(), spread = pb.sigma * n * pb.dt;
+  auto reduced = make_analytic_target<2>([&](const Vec<2>& z, Vec<2>* grad, Mat<2>* hess) {
+    Vec<2> gf;
+    Mat<2> hf;
+    const double f = himmelblau(z, grad ? &gf : nullptr, hess ? &hf : nullptr);
+    if (grad) *grad = (z - x) / spread + gf / g;
+    if (hess) *hess = Mat<2>::Identity() / spread + hf / g;
+    return (z - x).squaredNorm() / (2.0 * spread) + f / g;
+  });
+  const auto r = minimize(reduced, warm);
+  HimmelblauLaplace lp;
+  lp.x = x;
+  lp.end = r.x;
+  lp.phi = r.value;
+  lp.n = n;
+  lp.status = r.status;
+  // Hessian of F at mu: (T kron I2) / (sigma dt) plus grad^2 f(z*) / gamma in the last block.
+  Mat<2> hf;
+  himmelblau(lp.end, nullptr, &hf);
+  const double w = 1.0 / (pb.sigma * pb.dt);
+  BlockTridiagonal<2> H(n);
+  for (int i = 0; i < n; ++i) H.diagonal[i] = 2.0 * w * Mat<2>::Identity();
+  for (int i = 0; i + 1 < n; ++i) H.subdiagonal[i] = -w * Mat<2>::Identity();
+  H.diagonal[n - 1] = w * Mat<2>::Identity() + hf / g;
+  double damping = 0.0;
+  while (!lp.factor.compute(H)) {
+    // Not SPD (the minimiser stopped at a saddle): any SPD Hessian keeps the weights exact.
+    const double add = damping == 0.0 ? 1e-8 * H.diagonal[n - 1].cwiseAbs().maxCoeff() : damping;
+    H.diagonal[n - 1].diagonal().array() += add;
+    damping = 10.0 * add;
+    if (lp.status == MinimizeStatus::kConverged) lp.status = MinimizeStatus::kNotPositiveDefinite;
+  }
+  lp.log_det_L = lp.factor.log_det_L();
+  return lp;
+}
+
+double himmelblau_path_function(const HimmelblauProblem& pb, const Vec<2>& x,
+                                const Eigen::VectorXd& y) {
+  const int n = static_cast<int>(y.size() / 2);
+  const double inv = 1.0 / (2.0 * pb.sigma * pb.dt);
+  double f = 0.0;
+  Vec<2> prev = x;
+  for (int i = 0; i < n; ++i) {
+    const Vec<2> yi = y.segment<2>(2 * i);
+    f += (yi - prev).squaredNorm() * inv;
+    prev = yi;
+  }
+  return f + himmelblau(prev) / pb.gamma();
+}
+
+namespace {
+// Log weights of the linear map for reference variables xi (2n x M) around `lp`.
+double log_psi_hat(const HimmelblauProblem& pb, const HimmelblauLaplace& lp,
+                   const Eigen::MatrixXd& xi, std::vector<double>& lw) {
+  const Eigen::VectorXd mu = lp.path();
+  const double log_norm = lp.n * std::log(pb.sigma * pb.dt) + lp.log_det_L;
+  lw.resize(static_cast<std::size_t>(xi.cols()));
+  Eigen::VectorXd y(mu.size());
+  for (Eigen::Index j = 0; j < xi.cols(); ++j) {
+    y = xi.col(j);
+    lp.factor.upper_solve_in_place(y);
+    y += mu;
+    lw[static_cast<std::size_t>(j)] =
+        -himmelblau_path_function(pb, lp.x, y) + 0.5 * xi.col(j).squaredNorm() - log_norm;
+  }
+  return log_mean_exp(lw);
+}
+
+MinimizeStatus worse(MinimizeStatus a, MinimizeStatus b) {
+  return a == MinimizeStatus::kConverged ? b : a;
+}
+}  // namespace
+
+HimmelblauEstimate himmelblau_control(const HimmelblauProblem& pb, const Vec<2>& x, int k, int M,
+                                      const Vec<2>& warm, const StreamKey& key) {
+  require(M >= 1, "Himmelblau control: expected at least 1 sample, got {}", M);
+  const HimmelblauLaplace at_x = himmelblau_laplace(pb, x, k, warm);
+  const int n = at_x.n;
+  Eigen::MatrixXd xi(2 * n, M);
+  Rng rng({key.seed, key.step, key.index, purpose::kReference});
+  rng.fill_normal(xi);
+  std::vector<double> lw;
+  HimmelblauEstimate est;
+  est.log_psi = log_psi_hat(pb, at_x, xi, lw);
+  {
+    std::vector<double> wbar(lw.size());
+    est.ess = normalize_log_weights(lw, wbar).ess;
+  }
+  est.end = at_x.end;
+  est.log_det_L = at_x.log_det_L;
+  est.status = at_x.status;
+  est.laplace_u = (at_x.end - x) / (n * pb.dt);
+  const double h = 1e-4 * std::max(1.0, x.cwiseAbs().maxCoeff());
+  for (int i = 0; i < 2; ++i) {
+    Vec<2> xp = x, xm = x;
+    xp(i) += h;
+    xm(i) -= h;
+    // Common random numbers: the same xi at x + h and x - h; re-minimise warm-started at z*(x).
+    const auto lp = himmelblau_laplace(pb, xp, k, at_x.end);
+    const auto lm = himmelblau_laplace(pb, xm, k, at_x.end);
+    est.status = worse(worse(est.status, lp.status), lm.status);
+    est.u(i) = pb.sigma * (log_psi_hat(pb, lp, xi, lw) - log_psi_hat(pb, lm, xi, lw)) / (2.0 * h);
+  }
+  return est;
+}
+
+HimmelblauRun simulate_himmelblau_run(const HimmelblauProblem& pb, int M, std::uint64_t seed,
+                                      std::uint64_t run) {
+  pb.validate();
+  const int K = pb.num_steps();
+  Rng noise({seed, run, 0, purpose::kProcessNoise});
+  HimmelblauRun r;
+  r.x.push_back(pb.x0);
+  Vec<2> warm = pb.x0;
+  const double sd = std::sqrt(pb.sigma * pb.dt);
+  for (int k = 0; k < K; ++k) {
+    const auto est = himmelblau_control(pb, r.x.back(), k, M, warm,
+                                        {seed, run, static_cast<std::uint64_t>(k), 0});
+    warm = est.end;
+    r.ess_mean += est.ess / K;
+    r.failed_minimizations += est.status == MinimizeStatus::kConverged ? 0 : 1;
+    r.u.push_back(est.u);
+    r.cost += 0.5 * pb.control_cost * est.u.squaredNorm() * pb.dt;
+    const Vec<2> w = noise.normal_vector<2>();
+    r.x.push_back(r.x.back() + est.u * pb.dt + sd * w);
+  }
+  r.final_f = himmelblau(r.x.back());
+  r.cost += r.final_f;
+  return r;
+}
+
+}  // namespace implicit::control

@@ -1,0 +1,166 @@
+// Himmelblau via stochastic control (spec §2.6).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+#include "implicit/control/himmelblau.hpp"
+#include "implicit/core/error.hpp"
+#include "implicit/core/parallel.hpp"
+#include "implicit/core/target.hpp"
+
+using namespace implicit::control;
+using implicit::Mat;
+using implicit::Vec;
+
+namespace {
+struct HimmelblauModel {
+  template <typename T>
+  T operator()(const Eigen::Matrix<T, 2, 1>& x) const {
+    const T a = x(0) * x(0) + x(1) - 11.0;
+    const T b = x(0) + x(1) * x(1) - 7.0;
+    return a * a + b * b;
+  }
+};
+
+// The full path function F(y) in R^{2n} as a banded target (2x2 blocks), for the check that the
+// banded Newton method on the whole path finds the same minimum as the 2-D reduction.
+struct FullPath {
+  static constexpr int Block = 2;
+  const HimmelblauProblem* pb;
+  Vec<2> x;
+  int n;
+  int num_blocks() const { return n; }
+  double evaluate(const Eigen::VectorXd& y, Eigen::VectorXd* g,
+                  implicit::BlockTridiagonal<2>* h) const {
+    const double w = 1.0 / (pb->sigma * pb->dt);
+    Vec<2> gf;
+    Mat<2> hf;
+    himmelblau(y.segment<2>(2 * (n - 1)), &gf, &hf);
+    if (g) {
+      g->setZero(2 * n);
+      for (int i = 0; i < n; ++i) {
+        const Vec<2> prev = i == 0 ? x : Vec<2>(y.segment<2>(2 * (i - 1)));
+        const Vec<2> d = (y.segment<2>(2 * i) - prev) * w;
+        g->segment<2>(2 * i) += d;
+        if (i > 0) g->segment<2>(2 * (i - 1)) -= d;
+      }
+      g->segment<2>(2 * (n - 1)) += gf / pb->gamma();
+    }
+    if (h) {
+      h->resize(n);
+      for (int i = 0; i < n; ++i) h->diagonal[i] = 2 * w * Mat<2>::Identity();
+      for (int i = 0; i + 1 < n; ++i) h->subdiagonal[i] = -w * Mat<2>::Identity();
+      h->diagonal[n - 1] = w * Mat<2>::Identity() + hf / pb->gamma();
+    }
+    return himmelblau_path_function(*pb, x, y);
+  }
+};
+}  // namespace
+
+TEST(Himmelblau, AnalyticDerivativesMatchAutodiff) {
+  auto t = implicit::make_analytic_target<2>(
+      [](const Vec<2>& x, Vec<2>* g, Mat<2>* h) { return himmelblau(x, g, h); });
+  for (const Vec<2>& x : {Vec<2>(-1, -4), Vec<2>(0.3, 2.2), Vec<2>(3.5, -1.9)}) {
+    const auto c = implicit::check_derivatives(t, HimmelblauModel{}, x);
+    EXPECT_TRUE(c.ok(1e-12)) << c.describe();
+  }
+}
+
+TEST(Himmelblau, NewtonTable) {
+  // Spec §2.6 (Table 4, first column): full Newton steps converge to the saddle.
+  const double table[][3] = {{-1, -4, 260},
+                             {0.08813041, -2.90269995, 195.36074509},
+                             {-0.06838199, -2.32485870, 180.19421076},
+                             {-0.11416816, -2.04669508, 178.43314993},
+                             {-0.12672480, -1.96224796, 178.33799649},
+                             {-0.12794928, -1.95379876, 178.33723927},
+                             {-0.12796135, -1.95371499, 178.33723920}};
+  const auto xs = himmelblau_newton(Vec<2>(-1, -4), 6);
+  for (int k = 0; k <= 6; ++k) {
+    EXPECT_NEAR(xs[k](0), table[k][0], 1e-8) << "k " << k;
+    EXPECT_NEAR(xs[k](1), table[k][1], 1e-8) << "k " << k;
+    EXPECT_NEAR(himmelblau(xs[k]), table[k][2], 1e-8) << "k " << k;
+  }
+  const auto far = himmelblau_newton(Vec<2>(-1, -4), 12);
+  EXPECT_NEAR(himmelblau(far.back()), 178.3372392019, 1e-9);
+  Mat<2> h;
+  himmelblau(far.back(), nullptr, &h);
+  Eigen::SelfAdjointEigenSolver<Mat<2>> es(h);
+  EXPECT_NEAR(es.eigenvalues()(0), -50.610, 1e-3);
+  EXPECT_NEAR(es.eigenvalues()(1), 20.284, 1e-3);
+}
+
+TEST(Himmelblau, StationaryPoints) {
+  const double pts[][3] = {{3, 2, 0},
+                           {-2.805118087, 3.131312518, 0},
+                           {-3.779310253, -3.283185991, 0},
+                           {3.584428340, -1.848126527, 0},
+                           {3.385154184, 0.073851880, 13.311926},
+                           {-3.073025751, -0.081353044, 104.015163},
+                           {0.086677505, 2.884254701, 67.719150},
+                           {-0.270844591, -0.923038556, 181.616522}};
+  for (const auto& p : pts) {
+    Vec<2> g;
+    const double f = himmelblau(Vec<2>(p[0], p[1]), &g);
+    EXPECT_NEAR(f, p[2], 1e-6);
+    EXPECT_LT(g.norm(), 1e-6);
+  }
+}
+
+TEST(Himmelblau, FirstStepOracles) {
+  HimmelblauProblem pb;
+  const auto lp = himmelblau_laplace(pb, pb.x0, 0, pb.x0);
+  ASSERT_EQ(lp.status, implicit::MinimizeStatus::kConverged);
+  EXPECT_NEAR(lp.end(0), -3.77929836, 1e-8);
+  EXPECT_NEAR(lp.end(1), -3.28318625, 1e-8);
+  EXPECT_NEAR(lp.phi, 20.595886443907, 1e-9);
+  EXPECT_NEAR(lp.log_det_L, 104.2817507, 1e-7);
+  // The banded Newton method on the whole 40-dimensional path finds the same minimum.
+  FullPath full{&pb, pb.x0, lp.n};
+  const auto r = implicit::minimize_banded(full, lp.path());
+  EXPECT_NEAR(r.value, lp.phi, 1e-9);
+  EXPECT_LT((r.x - lp.path()).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_NEAR(r.factor.log_det_L(), lp.log_det_L, 1e-9);
+  // The control: equal to the Laplace value (z* - x0)/(n dt) to 1e-7; log psi_hat near -32.7744
+  // (sd about 1e-4 at M = 50: tolerance 4.5 sd plus half a unit of the printed digit).
+  const auto est = himmelblau_control(pb, pb.x0, 0, 50, pb.x0, {3});
+  EXPECT_NEAR(est.u(0), -0.1389649, 1e-7);
+  EXPECT_NEAR(est.u(1), 0.0358407, 1e-7);
+  EXPECT_NEAR((est.u - est.laplace_u).norm(), 0.0, 1e-7);
+  EXPECT_NEAR(est.log_psi, -32.7744, 4.5e-4 + 5e-5);
+  EXPECT_GT(est.ess, 45.0);
+}
+
+TEST(Himmelblau, RunsEndInTheGlobalBasin) {
+  // Spec §2.6: every run ends at (-3.7793, -3.2832), the mean cost is 0.998 with a per-run sd
+  // of about 1.07 (the last, uncontrollable noise step); tolerance 4.5 SE of our mean.
+  HimmelblauProblem pb;
+  const int runs = 12;
+  std::vector<double> cost(runs);
+  implicit::parallel_for(
+      runs,
+      [&](std::size_t r) {
+        const auto run = simulate_himmelblau_run(pb, 50, 17, r);
+        cost[r] = run.cost;
+        EXPECT_LT(run.final_f, 10.0);
+        EXPECT_LT((run.x.back() - Vec<2>(-3.7793, -3.2832)).norm(), 0.5);
+        EXPECT_EQ(run.failed_minimizations, 0);
+      },
+      1);
+  double m = 0, q = 0;
+  for (double c : cost) m += c / runs;
+  for (double c : cost) q += (c - m) * (c - m);
+  const double se = std::sqrt(q / (runs - 1) / runs);
+  EXPECT_NEAR(m, 0.998, 4.5 * se);
+}
+
+TEST(Himmelblau, BadInput) {
+  HimmelblauProblem pb;
+  pb.dt = 0.0;
+  EXPECT_THROW(pb.validate(), implicit::InvalidArgument);
+  pb = {};
+  EXPECT_THROW(himmelblau_control(pb, pb.x0, 20, 50, pb.x0, {1}), implicit::InvalidArgument);
+  EXPECT_THROW(himmelblau_control(pb, pb.x0, 0, 0, pb.x0, {1}), implicit::InvalidArgument);
+}
