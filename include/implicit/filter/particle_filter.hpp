@@ -1,0 +1,263 @@
+#pragma once
+// The sequential Monte Carlo engine for localization: one engine, proposals as plug-ins.
+//
+//   using namespace implicit;
+//   filter::ParticleFilter pf(robot::UteModel(), robot::RangeBearingSensor(), map,
+//                             filter::ImplicitProposal{}, options);  // FilterOptions
+//   pf.initialize(mean, covariance);
+//   for (const auto& step : steps) {
+//     const filter::StepSummary& s = pf.step(step.u, detections);   // detections may be empty
+//     ... s.mean, s.covariance, s.ess, s.resampled, s.log_likelihood_increment ...
+//   }
+//
+// Each step moves every particle with the proposal (in parallel; particle j draws from
+// Rng({seed, step, j, proposal purpose}), so results are bit-identical for any thread count),
+// adds the log weight increments, normalises (log-sum-exp), and resamples (systematic by default)
+// when ESS < threshold * M. Steps without detections only predict; the weights stay unchanged.
+//
+// Per-step outputs: weighted mean pose (heading by circular mean), covariance (heading deviations
+// wrapped), ESS, whether it resampled, and the log marginal-likelihood increment
+// log sum_j wbar^j_{n-1} exp(delta l^j) - a "lost" signal: it drops sharply when no particle
+// explains the data. ESS alone is not a health signal (it can be high in a lost filter).
+//
+// Common mistakes: reusing one Rng stream for two purposes (use distinct purposes), reading the
+// heading mean as the plain average of angles (use StepSummary::mean), and comparing
+// log-likelihood increments between runs with different clutter settings.
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Cholesky>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/parallel.hpp"
+#include "implicit/core/resampling.hpp"
+#include "implicit/core/rng.hpp"
+#include "implicit/core/weights.hpp"
+#include "implicit/filter/proposals.hpp"
+#include "implicit/robot/landmark_map.hpp"
+#include "implicit/robot/log_format.hpp"
+
+namespace implicit::filter {
+
+struct FilterOptions {
+  std::size_t particles = 100;
+  double resample_threshold = 0.5;  ///< resample when ESS < threshold * M
+  ResamplingScheme resampling = ResamplingScheme::kSystematic;
+  std::uint64_t seed = 0;  ///< first field of every stream key
+  AssociationOptions association;
+};
+
+struct StepSummary {
+  std::size_t step = 0;  ///< 1-based step counter
+  Pose mean = Pose::Zero();
+  Mat3 covariance = Mat3::Zero();
+  double ess = 0.0;
+  bool resampled = false;
+  bool updated = false;                   ///< detections were processed at this step
+  double log_likelihood_increment = 0.0;  ///< 0 at prediction-only steps
+  bool all_weights_zero = false;          ///< every particle got weight 0: weights reset to uniform
+  double detections_used = 0.0;     ///< mean over particles (weighted by the previous weights)
+  double detections_dropped = 0.0;  ///< idem
+  double newton_evaluations = 0.0;  ///< mean over particles
+  int fallbacks = 0;                ///< particles that needed a Cholesky fallback
+  int failures = 0;                 ///< particles with a non-finite model output (weight 0)
+};
+
+template <robot::MotionModel Motion, robot::LandmarkSensor Sensor, typename Proposal>
+class ParticleFilter {
+ public:
+  ParticleFilter(Motion motion, Sensor sensor, robot::LandmarkMap map, Proposal proposal,
+                 FilterOptions options)
+      : motion_(std::move(motion)),
+        sensor_(std::move(sensor)),
+        map_(std::move(map)),
+        proposal_(std::move(proposal)),
+        options_(options) {
+    require(options_.particles >= 1, "particle filter: expected at least 1 particle, got {}",
+            options_.particles);
+    require(options_.resample_threshold >= 0 && options_.resample_threshold <= 1,
+            "particle filter: expected a resampling threshold in [0, 1], got {}",
+            options_.resample_threshold);
+    require(options_.association.gate > 0, "particle filter: expected a positive gate, got {}",
+            options_.association.gate);
+    const Mat2& noise = sensor_.noise_covariance();
+    Eigen::LLT<Mat2> llt(noise);
+    require(llt.info() == Eigen::Success && noise.allFinite(),
+            "particle filter: expected a symmetric positive definite sensor covariance, got "
+            "[[{}, {}], [{}, {}]]",
+            noise(0, 0), noise(0, 1), noise(1, 0), noise(1, 1));
+    context_.motion = &motion_;
+    context_.sensor = &sensor_;
+    context_.map = std::span<const Landmark>(map_.positions());
+    context_.noise_information = llt.solve(Mat2::Identity());
+    context_.log_det_noise = 2.0 * std::log(llt.matrixL()(0, 0) * llt.matrixL()(1, 1));
+    context_.log_clutter = robot::clutter_log_density(options_.association.gate, noise);
+    context_.association = options_.association;
+    const std::size_t m = options_.particles;
+    particles_.resize(m);
+    next_.resize(m);
+    log_weights_.assign(m, -std::log(static_cast<double>(m)));
+    weights_.assign(m, 1.0 / static_cast<double>(m));
+    increments_.resize(m);
+    stats_.resize(m);
+  }
+
+  const Motion& motion() const { return motion_; }
+  const Sensor& sensor() const { return sensor_; }
+  const robot::LandmarkMap& map() const { return map_; }
+  const FilterOptions& options() const { return options_; }
+  std::size_t size() const { return particles_.size(); }
+  std::span<const Pose> particles() const { return particles_; }
+  std::span<const double> weights() const { return weights_; }  ///< normalised
+  const StepSummary& last() const { return summary_; }
+
+  /// Draws the particles from N(mean, covariance) (stream step 0, purpose kInitial).
+  void initialize(const Pose& mean, const Mat3& covariance) {
+    Eigen::LLT<Mat3> llt(covariance);
+    require(llt.info() == Eigen::Success && covariance.allFinite(),
+            "particle filter: expected a symmetric positive definite initial covariance");
+    const Mat3 l = llt.matrixL();
+    parallel_for(particles_.size(), [&](std::size_t j) {
+      Rng rng({options_.seed, 0, j, purpose::kInitial});
+      const Vec<3> xi(rng.normal(), rng.normal(), rng.normal());
+      particles_[j] = mean + l * xi;
+    });
+    reset_weights();
+    step_ = 0;
+    summarize();
+  }
+
+  /// Starts from given particles with equal weights.
+  void initialize(std::span<const Pose> particles) {
+    require(particles.size() == particles_.size(),
+            "particle filter: expected {} initial particles, got {}", particles_.size(),
+            particles.size());
+    std::copy(particles.begin(), particles.end(), particles_.begin());
+    reset_weights();
+    step_ = 0;
+    summarize();
+  }
+
+  /// One motion step with control u and the detections seen after it (empty: predict only).
+  const StepSummary& step(const Control& u, std::span<const LabelledMeasurement> z = {}) {
+    require(z.size() <= static_cast<std::size_t>(MclObjective<Sensor>::kMaxTerms),
+            "particle filter: expected at most {} detections per step, got {}",
+            MclObjective<Sensor>::kMaxTerms, z.size());
+    for (const LabelledMeasurement& lz : z)
+      require(lz.landmark < static_cast<int>(map_.size()) && lz.z.allFinite(),
+              "particle filter: expected finite detections with a landmark index below {}, got "
+              "({}, {}) for landmark {}",
+              map_.size(), lz.z(0), lz.z(1), lz.landmark);
+    ++step_;
+    context_.u = u;
+    context_.z = z;
+    const std::uint64_t n = step_;
+    parallel_for(particles_.size(), [&](std::size_t j) {
+      Rng rng({options_.seed, n, j, Proposal::kPurpose});
+      stats_[j] = ParticleStats{};
+      increments_[j] = proposal_.propose(context_, particles_[j], rng, next_[j], stats_[j]);
+    });
+    std::swap(particles_, next_);
+
+    summary_ = StepSummary{};
+    summary_.step = step_;
+    summary_.updated = !z.empty();
+    for (std::size_t j = 0; j < stats_.size(); ++j) {
+      summary_.detections_used += weights_[j] * stats_[j].used;
+      summary_.detections_dropped += weights_[j] * stats_[j].dropped;
+      summary_.newton_evaluations += stats_[j].iterations;
+      summary_.fallbacks += stats_[j].fallback ? 1 : 0;
+      summary_.failures += stats_[j].failed ? 1 : 0;
+    }
+    summary_.newton_evaluations /= static_cast<double>(stats_.size());
+    if (summary_.updated || summary_.failures > 0) update_weights();
+    summarize();
+    return summary_;
+  }
+
+  /// Convenience: a step with the observations of a robot log (ids mapped to map indices).
+  const StepSummary& step(const Control& u, std::span<const robot::Observation> observations,
+                          std::vector<LabelledMeasurement>& buffer) {
+    buffer.clear();
+    for (const robot::Observation& o : observations) {
+      const int k = o.landmark_id >= 0 ? map_.index_of(o.landmark_id) : -1;
+      require(o.landmark_id < 0 || k >= 0,
+              "particle filter: expected a landmark id of the map, got unknown id {}",
+              o.landmark_id);
+      buffer.push_back({o.z, k});
+    }
+    return step(u, std::span<const LabelledMeasurement>(buffer));
+  }
+
+ private:
+  void reset_weights() {
+    const double m = static_cast<double>(particles_.size());
+    std::fill(log_weights_.begin(), log_weights_.end(), -std::log(m));
+    std::fill(weights_.begin(), weights_.end(), 1.0 / m);
+  }
+
+  void update_weights() {
+    const std::size_t m = particles_.size();
+    for (std::size_t j = 0; j < m; ++j) log_weights_[j] += increments_[j];
+    const double inc = log_sum_exp(log_weights_);  // previous weights were normalised
+    summary_.log_likelihood_increment = inc;
+    if (!(inc > -std::numeric_limits<double>::infinity())) {
+      summary_.all_weights_zero = true;
+      reset_weights();
+    } else {
+      for (std::size_t j = 0; j < m; ++j) {
+        log_weights_[j] -= inc;
+        weights_[j] = std::exp(log_weights_[j]);
+      }
+    }
+    const double ess = effective_sample_size(weights_);
+    if (needs_resampling(ess, m, options_.resample_threshold)) {
+      Rng rng({options_.seed, step_, 0, purpose::kResampling});
+      const std::vector<std::size_t> idx = resample(options_.resampling, weights_, m, rng);
+      for (std::size_t j = 0; j < m; ++j) next_[j] = particles_[idx[j]];
+      std::swap(particles_, next_);
+      reset_weights();
+      summary_.resampled = true;
+    }
+  }
+
+  void summarize() {
+    const std::size_t m = particles_.size();
+    double sx = 0.0, sy = 0.0, ss = 0.0, sc = 0.0;
+    for (std::size_t j = 0; j < m; ++j) {
+      sx += weights_[j] * particles_[j](0);
+      sy += weights_[j] * particles_[j](1);
+      ss += weights_[j] * std::sin(particles_[j](2));
+      sc += weights_[j] * std::cos(particles_[j](2));
+    }
+    Pose mean(sx, sy, std::atan2(ss, sc));
+    Mat3 cov = Mat3::Zero();
+    for (std::size_t j = 0; j < m; ++j) {
+      Vec<3> d = particles_[j] - mean;
+      d(2) = wrap_angle(d(2));
+      cov += weights_[j] * d * d.transpose();
+    }
+    summary_.mean = mean;
+    summary_.covariance = cov;
+    summary_.ess = effective_sample_size(weights_);
+  }
+
+  Motion motion_;
+  Sensor sensor_;
+  robot::LandmarkMap map_;
+  Proposal proposal_;
+  FilterOptions options_;
+  ProposalContext<Motion, Sensor> context_;
+  std::vector<Pose> particles_, next_;
+  std::vector<double> log_weights_, weights_, increments_;
+  std::vector<ParticleStats> stats_;
+  std::uint64_t step_ = 0;
+  StepSummary summary_;
+};
+
+}  // namespace implicit::filter

@@ -1,0 +1,275 @@
+#pragma once
+// Proposals of the particle filter: how one particle moves from X^j_{n-1} to X^j_n and what its
+// log weight gains. The engine (particle_filter.hpp) is the same for all of them.
+//
+//   BootstrapProposal  standard MCL: X ~ N(f^j, Sigma1^j), weight *= p(z | X)         (spec §3.4)
+//   ImplicitProposal   implicit MCL: minimise F^j, X = mu + L^-T xi (linear map) or the random
+//                      map, weight *= (3/2) log 2pi - log det L + |xi|^2/2 - F^j(X)    (spec §3.4)
+//
+// In expectation over xi the implicit increment equals the predictive likelihood p(z_n |
+// X^j_{n-1}), so the implicit filter is exact; the bootstrap increment has the same expectation
+// over the motion noise but a much larger variance when the data are accurate and the model noisy.
+//
+// Association of unlabelled detections (spec §3.9): per particle, maximum likelihood over the map
+// with a chi-square gate; bootstrap at the sampled pose with S = Sigma2, implicit at the prediction
+// f^j with S = H Sigma1^j H^T + Sigma2. A detection outside the gate contributes the clutter
+// density p0 = N(gate boundary; 0, Sigma2) when `clutter` is on, nothing otherwise.
+//
+// A user proposal is any type with `kPurpose` (its Rng purpose) and
+//   double propose(const ProposalContext<Motion, Sensor>&, const Pose& previous, Rng&,
+//                  Pose& next, ParticleStats&) const;
+// returning the log weight increment (-inf: weight zero). It must not allocate or throw.
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Cholesky>
+
+#include "implicit/core/rng.hpp"
+#include "implicit/filter/mcl_objective.hpp"
+#include "implicit/robot/data_association.hpp"
+#include "implicit/robot/models.hpp"
+
+namespace implicit::filter {
+
+/// A detection with its landmark, if known (index into the map; -1 = associate).
+struct LabelledMeasurement {
+  Measurement z;
+  int landmark = -1;
+};
+
+struct AssociationOptions {
+  double gate = robot::kChiSquare2Dof99;  ///< chi-square gate on d^2 (2 dof, 99 %)
+  bool clutter = true;                    ///< dropped detections contribute p0
+  double min_range = 0.05;                ///< [m] landmarks closer than this are not candidates
+};
+
+/// Per-particle bookkeeping of one step (written by the proposal, reduced by the engine).
+struct ParticleStats {
+  int used = 0;           ///< detections associated (entered the likelihood)
+  int dropped = 0;        ///< detections outside the gate
+  int iterations = 0;     ///< Newton objective evaluations
+  bool fallback = false;  ///< a Cholesky failed and a fallback (Gauss-Newton / prior) was used
+  bool failed = false;    ///< the particle's weight was set to zero (non-finite model output)
+};
+
+/// Everything a proposal needs at one step; built by the engine, shared by all particles.
+template <robot::MotionModel Motion, robot::LandmarkSensor Sensor>
+struct ProposalContext {
+  const Motion* motion = nullptr;
+  const Sensor* sensor = nullptr;
+  std::span<const Landmark> map;
+  Mat2 noise_information;      ///< Sigma2^-1 (computed once by a Cholesky solve)
+  double log_det_noise = 0.0;  ///< log det Sigma2
+  double log_clutter = 0.0;    ///< log p0
+  AssociationOptions association;
+  Control u;
+  std::span<const LabelledMeasurement> z;  ///< empty: prediction only
+};
+
+namespace detail {
+
+/// Prediction f, Cholesky of Sigma1; false if Sigma1 is not SPD or f not finite.
+template <typename Motion>
+bool predict(const Motion& motion, const Pose& previous, const Control& u, Pose& f,
+             Eigen::LLT<Mat3>& sigma1) {
+  f = motion.predict(previous, u);
+  sigma1.compute(motion.process_covariance(previous, u));
+  return f.allFinite() && sigma1.info() == Eigen::Success;
+}
+
+inline double log_det_from_llt(const Eigen::LLT<Mat3>& llt) {
+  const Mat3& l = llt.matrixLLT();
+  return 2.0 * (std::log(l(0, 0)) + std::log(l(1, 1)) + std::log(l(2, 2)));
+}
+
+/// Maximum-likelihood association of z at pose x with innovation covariance
+/// H pose_cov H^T + Sigma2 (pose_cov = nullptr: Sigma2 alone).
+template <typename Ctx>
+int associate(const Ctx& ctx, const Pose& x, const Mat3* pose_cov, const Measurement& z) {
+  const Mat2& noise = ctx.sensor->noise_covariance();
+  const double min_r2 = ctx.association.min_range * ctx.association.min_range;
+  return robot::associate_max_likelihood(
+             static_cast<int>(ctx.map.size()),
+             [&](int i, Measurement& e, Mat2& s) {
+               const Landmark& m = ctx.map[static_cast<std::size_t>(i)];
+               if ((m - x.template head<2>()).squaredNorm() < min_r2) return false;
+               e = ctx.sensor->residual(ctx.sensor->predict(x, m), z);
+               if (pose_cov) {
+                 const Mat23 h = ctx.sensor->jacobian_pose(x, m);
+                 s = h * (*pose_cov) * h.transpose() + noise;
+               } else {
+                 s = noise;
+               }
+               return true;
+             },
+             ctx.association.gate)
+      .index;
+}
+
+}  // namespace detail
+
+/// Standard MCL: sample the motion model, weight by the sensor likelihood.
+struct BootstrapProposal {
+  static constexpr std::uint64_t kPurpose = purpose::kProposal;
+  static constexpr std::string_view kName = "standard";
+
+  template <typename Motion, typename Sensor>
+  double propose(const ProposalContext<Motion, Sensor>& ctx, const Pose& previous, Rng& rng,
+                 Pose& next, ParticleStats& st) const {
+    Pose f;
+    Eigen::LLT<Mat3> sigma1;
+    if (!detail::predict(*ctx.motion, previous, ctx.u, f, sigma1)) {
+      st.failed = true;
+      next = previous;
+      return -std::numeric_limits<double>::infinity();
+    }
+    const Vec<3> xi(rng.normal(), rng.normal(), rng.normal());
+    next = f + sigma1.matrixL() * xi;
+    double log_w = 0.0;
+    const double log_norm = -kLog2Pi - 0.5 * ctx.log_det_noise;  // log N(0; 0, Sigma2)
+    for (const LabelledMeasurement& lz : ctx.z) {
+      const int k = lz.landmark >= 0 ? lz.landmark : detail::associate(ctx, next, nullptr, lz.z);
+      if (k < 0) {
+        ++st.dropped;
+        if (ctx.association.clutter) log_w += ctx.log_clutter;
+        continue;
+      }
+      ++st.used;
+      const Measurement e = ctx.sensor->residual(
+          ctx.sensor->predict(next, ctx.map[static_cast<std::size_t>(k)]), lz.z);
+      log_w += log_norm - 0.5 * e.dot(ctx.noise_information * e);
+    }
+    if (!std::isfinite(log_w) && log_w != -std::numeric_limits<double>::infinity()) {
+      st.failed = true;
+      return -std::numeric_limits<double>::infinity();
+    }
+    return log_w;
+  }
+};
+
+enum class ImplicitMap { kLinear, kRandom };
+
+/// Implicit MCL: per particle, minimise F^j and sample with the linear (or random) map.
+struct ImplicitProposal {
+  static constexpr std::uint64_t kPurpose = purpose::kReference;
+  static constexpr std::string_view kName = "implicit";
+
+  ImplicitMap map = ImplicitMap::kLinear;
+  NewtonOptions newton;
+
+  template <typename Motion, typename Sensor>
+  double propose(const ProposalContext<Motion, Sensor>& ctx, const Pose& previous, Rng& rng,
+                 Pose& next, ParticleStats& st) const {
+    constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+    Pose f;
+    Eigen::LLT<Mat3> sigma1;
+    if (!detail::predict(*ctx.motion, previous, ctx.u, f, sigma1)) {
+      st.failed = true;
+      next = previous;
+      return kNegInf;
+    }
+    const Vec<3> xi(rng.normal(), rng.normal(), rng.normal());
+    if (ctx.z.empty()) {  // F is the Gaussian prior: mu = f, H = Sigma1^-1, all weights equal
+      next = f + sigma1.matrixL() * xi;
+      return 0.0;
+    }
+    // Sigma1^-1 is needed as a matrix (it is the prior's Hessian); a Cholesky solve gives it.
+    const Mat3 prior_information = sigma1.solve(Mat3::Identity());
+    const Mat3 sigma1_full = sigma1.reconstructedMatrix();
+    const double constant = 0.5 * (3.0 * kLog2Pi + detail::log_det_from_llt(sigma1));
+    MclObjective<Sensor> obj;
+    obj.reset(*ctx.sensor, ctx.noise_information, f, prior_information, constant);
+    const double per_term = kLog2Pi + 0.5 * ctx.log_det_noise;  // 1/2 log det(2 pi Sigma2)
+    for (const LabelledMeasurement& lz : ctx.z) {
+      const int k = lz.landmark >= 0 ? lz.landmark : detail::associate(ctx, f, &sigma1_full, lz.z);
+      if (k < 0 || !obj.add(ctx.map[static_cast<std::size_t>(k)], lz.z)) {
+        ++st.dropped;
+        if (ctx.association.clutter) obj.add_constant(-ctx.log_clutter);
+        continue;
+      }
+      ++st.used;
+      obj.add_constant(per_term);
+    }
+    const NewtonResult nr = minimize_newton(obj, f, newton);
+    st.iterations += nr.iterations;
+    st.fallback = st.fallback || nr.gauss_newton_at_minimum;
+    if (!nr.ok) {
+      // No usable Gaussian approximation (F not finite at the prediction): sample the prior and
+      // weight by the likelihood, the bootstrap fallback, which is still a valid proposal.
+      st.fallback = true;
+      next = f + sigma1.matrixL() * xi;
+      const double lw = -(obj.evaluate(next) - constant);
+      if (!std::isfinite(lw)) {
+        st.failed = true;
+        return kNegInf;
+      }
+      // Prior density terms: F - constant - 1/2|xi|^2 is the negative log likelihood.
+      return lw + 0.5 * xi.squaredNorm();
+    }
+    if (map == ImplicitMap::kLinear) {
+      next = nr.mu + nr.L.transpose().triangularView<Eigen::Upper>().solve(xi);
+      const double fx = obj.evaluate(next);
+      if (!std::isfinite(fx)) {
+        st.failed = true;
+        return kNegInf;
+      }
+      return 1.5 * kLog2Pi - nr.log_det_L + 0.5 * xi.squaredNorm() - fx;
+    }
+    return random_map(obj, nr, xi, next, st);
+  }
+
+ private:
+  /// Random map (spec §1.3): X = mu + lambda L^-T eta, F(X) - phi = rho / 2.
+  template <typename Objective>
+  static double random_map(const Objective& obj, const NewtonResult& nr, const Vec<3>& xi,
+                           Pose& next, ParticleStats& st) {
+    constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+    const double rho = xi.squaredNorm();
+    const Vec<3> d = nr.L.transpose().triangularView<Eigen::Upper>().solve(xi / std::sqrt(rho));
+    auto g = [&](double lambda) { return obj.evaluate(nr.mu + lambda * d) - nr.phi - 0.5 * rho; };
+    double lo = 0.0, hi = std::sqrt(rho);
+    int k = 0;
+    for (; k < 60 && !(g(hi) > 0.0); ++k) {
+      lo = hi;
+      hi *= 2.0;
+    }
+    if (k == 60) {
+      st.failed = true;
+      next = nr.mu;
+      return kNegInf;
+    }
+    double lambda = 0.5 * (lo + hi);
+    for (int it = 0; it < 100; ++it) {
+      Vec<3> grad;
+      const double val = obj.evaluate(nr.mu + lambda * d, &grad) - nr.phi - 0.5 * rho;
+      if (val > 0.0)
+        hi = lambda;
+      else
+        lo = lambda;
+      const double slope = grad.dot(d);
+      double next_lambda = slope > 0.0 ? lambda - val / slope : 0.5 * (lo + hi);
+      if (!(next_lambda > lo && next_lambda < hi)) next_lambda = 0.5 * (lo + hi);  // safeguard
+      const bool done = std::abs(next_lambda - lambda) <= 1e-12 * lambda;
+      lambda = next_lambda;
+      if (done || hi - lo <= 1e-14 * hi) break;
+    }
+    next = nr.mu + lambda * d;
+    Vec<3> grad;
+    obj.evaluate(next, &grad);
+    const double slope = std::abs(grad.dot(d));
+    if (!(slope > 0.0) || !std::isfinite(slope)) {
+      st.failed = true;
+      return kNegInf;
+    }
+    // log w = (m/2) log 2pi - phi - log det L + (1 - m/2) log rho + (m-1) log lambda - log|grad.d|
+    return 1.5 * kLog2Pi - nr.phi - nr.log_det_L - 0.5 * std::log(rho) + 2.0 * std::log(lambda) -
+           std::log(slope);
+  }
+};
+
+}  // namespace implicit::filter
