@@ -56,7 +56,7 @@ void Progress::draw(std::size_t done, bool final, const std::string& note) {
   } else {
     // Plain lines: every 10 % and at the end (every tick in Style::kLines).
     if (!final && !every_tick_ && (percent / 10 == last_percent_ / 10)) return;
-    if (final && every_tick_ && last_percent_ == 100) return;  // the last tick said it all
+    if (final && last_percent_ == percent) return;  // the last tick said it all
     last_percent_ = percent;
     const double eta = fraction > 0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
     if (every_tick_)
