@@ -1,0 +1,107 @@
+// Timing of path integral control: one control evaluation for the double slit (M = 50), the
+// robot arm (n = 200) and Himmelblau (M = 50), and the whole of Table 2 (4 x 500 closed-loop
+// runs, parallel over runs). Figures are recorded in docs/performance.md.
+#include <benchmark/benchmark.h>
+
+#include "implicit/control/double_slit.hpp"
+#include "implicit/control/himmelblau.hpp"
+#include "implicit/control/path_integral.hpp"
+#include "implicit/control/robot_arm.hpp"
+
+using namespace implicit::control;
+
+namespace {
+
+void BM_SlitControl(benchmark::State& state, SlitEstimator estimator, SlitSampling sampling) {
+  const DoubleSlit slit;
+  const int M = static_cast<int>(state.range(0));
+  std::uint64_t i = 0;
+  for (auto _ : state) {
+    const auto e = slit.estimate_control(1.0, 0, M, estimator, {1, i++, 0, 0}, sampling);
+    benchmark::DoNotOptimize(e.u);
+  }
+}
+BENCHMARK_CAPTURE(BM_SlitControl, corrected_wall, SlitEstimator::kFrozenWall, SlitSampling::kWall)
+    ->Arg(50)
+    ->Arg(500);
+BENCHMARK_CAPTURE(BM_SlitControl, corrected_path, SlitEstimator::kFrozenWall, SlitSampling::kPath)
+    ->Arg(50);
+BENCHMARK_CAPTURE(BM_SlitControl, paper_wall, SlitEstimator::kPaper, SlitSampling::kWall)->Arg(50);
+
+void BM_ArmControl(benchmark::State& state) {
+  const ArmProblem problem;
+  const implicit::Vec<4> x(0.2, -0.1, 0.3, -0.2);
+  for (auto _ : state) benchmark::DoNotOptimize(arm_path_integral_control(x, 200, problem));
+}
+BENCHMARK(BM_ArmControl);
+
+void BM_HimmelblauControl(benchmark::State& state) {
+  const HimmelblauProblem pb;
+  const implicit::Vec<2> warm(-3.78, -3.28);
+  std::uint64_t i = 0;
+  for (auto _ : state) {
+    const auto e = himmelblau_control(pb, pb.x0, 0, 50, warm, {1, i++, 0, 0});
+    benchmark::DoNotOptimize(e.u);
+  }
+}
+BENCHMARK(BM_HimmelblauControl);
+
+struct Himmelblau2 {
+  template <typename T>
+  Eigen::Matrix<T, 2, 1> drift(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    return x * 0.0;
+  }
+  template <typename T>
+  T running_cost(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    return x(0) * 0.0;
+  }
+  template <typename T>
+  T final_cost(const Eigen::Matrix<T, 2, 1>& x) const {
+    const T a = x(0) * x(0) + x(1) - 11.0;
+    const T b = x(0) + x(1) * x(1) - 7.0;
+    return a * a + b * b;
+  }
+};
+
+// The same evaluation through the generic problem (autodiff, banded Newton on the 40-D path).
+void BM_GenericHimmelblauControl(benchmark::State& state) {
+  ControlSpec<2, 2> s;
+  s.G.setIdentity();
+  s.noise_covariance = 0.01 * implicit::Mat<2>::Identity();
+  s.control_cost = 0.01 * implicit::Mat<2>::Identity();
+  s.horizon = 20.0;
+  s.dt = 1.0;
+  const ControlProblem problem(Himmelblau2{}, s);
+  std::uint64_t i = 0;
+  for (auto _ : state) {
+    const auto c =
+        estimate_control(problem, implicit::Vec<2>(-1, -4), 0, {.samples = 50}, {1, i++, 0, 0});
+    benchmark::DoNotOptimize(c.u);
+  }
+}
+BENCHMARK(BM_GenericHimmelblauControl)->Unit(benchmark::kMicrosecond);
+
+void BM_SlitTable2(benchmark::State& state, SlitEstimator estimator) {
+  const DoubleSlit slit;
+  for (auto _ : state) {
+    for (int M : {10, 50, 100, 500}) {
+      SlitTableOptions o;
+      o.samples = M;
+      o.runs = 500;
+      o.estimator = estimator;
+      benchmark::DoNotOptimize(run_slit_table(slit, o).error_u_mean);
+    }
+  }
+}
+BENCHMARK_CAPTURE(BM_SlitTable2, corrected, SlitEstimator::kFrozenWall)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(BM_SlitTable2, paper, SlitEstimator::kPaper)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
