@@ -52,17 +52,20 @@ void validate(std::span<const double> w, std::span<const double> u, std::size_t 
             u[i]);
 }
 
-// Inverse CDF for sorted points s_0 <= s_1 <= ... in [0, 1): the ancestor of each point.
-// The ancestor is clamped to the last particle of positive weight, so that round-off in the
-// cumulative sum (which may end slightly below 1) never indexes past the end nor picks a
-// trailing zero-weight particle.
-void inverse_cdf(std::span<const double> w, std::span<const double> sorted_points,
+// Inverse CDF for `count` sorted points point(0) <= point(1) <= ... in [0, 1): the ancestor of
+// each point is appended to `out`. Points are generated on the fly (no array for systematic and
+// stratified schemes). The ancestor is clamped to the last particle of positive weight, so that
+// round-off in the cumulative sum (which may end slightly below 1) never indexes past the end nor
+// picks a trailing zero-weight particle.
+template <typename Point>
+void inverse_cdf(std::span<const double> w, std::size_t count, Point point,
                  std::vector<std::size_t>& out) {
   std::size_t last = w.size() - 1;
   while (last > 0 && !(w[last] > 0.0)) --last;
   std::size_t i = 0;
   double cumulative = w[0];
-  for (double s : sorted_points) {
+  for (std::size_t k = 0; k < count; ++k) {
+    const double s = point(k);
     while (s >= cumulative && i < last) cumulative += w[++i];
     out.push_back(i);
   }
@@ -70,28 +73,31 @@ void inverse_cdf(std::span<const double> w, std::span<const double> sorted_point
 
 }  // namespace
 
-std::vector<std::size_t> resample(ResamplingScheme scheme, std::span<const double> w,
-                                  std::span<const double> u, std::size_t n) {
+void resample(ResamplingScheme scheme, std::span<const double> w, std::span<const double> u,
+              std::size_t n, std::vector<std::size_t>& out) {
   validate(w, u, uniforms_needed(scheme, n));
-  std::vector<std::size_t> out;
+  out.clear();
   out.reserve(n);
-  if (n == 0) return out;
-  std::vector<double> points(n);
+  if (n == 0) return;
   const double dn = static_cast<double>(n);
   switch (scheme) {
-    case ResamplingScheme::kSystematic:
-      for (std::size_t k = 0; k < n; ++k) points[k] = (static_cast<double>(k) + u[0]) / dn;
-      inverse_cdf(w, points, out);
+    case ResamplingScheme::kSystematic: {
+      const double u0 = u[0];
+      inverse_cdf(
+          w, n, [&](std::size_t k) { return (static_cast<double>(k) + u0) / dn; }, out);
       break;
+    }
     case ResamplingScheme::kStratified:
-      for (std::size_t k = 0; k < n; ++k) points[k] = (static_cast<double>(k) + u[k]) / dn;
-      inverse_cdf(w, points, out);
+      inverse_cdf(
+          w, n, [&](std::size_t k) { return (static_cast<double>(k) + u[k]) / dn; }, out);
       break;
-    case ResamplingScheme::kMultinomial:
-      std::copy(u.begin(), u.begin() + static_cast<std::ptrdiff_t>(n), points.begin());
+    case ResamplingScheme::kMultinomial: {
+      std::vector<double> points(u.begin(), u.begin() + static_cast<std::ptrdiff_t>(n));
       std::sort(points.begin(), points.end());
-      inverse_cdf(w, points, out);
+      inverse_cdf(
+          w, n, [&](std::size_t k) { return points[k]; }, out);
       break;
+    }
     case ResamplingScheme::kResidual: {
       // Deterministic floor(n w_i) copies, then multinomial on the residual weights.
       std::vector<double> residual(w.size());
@@ -107,14 +113,21 @@ std::vector<std::size_t> resample(ResamplingScheme scheme, std::span<const doubl
         double total = 0.0;
         for (double r : residual) total += r;
         for (double& r : residual) r /= total;
-        points.assign(u.begin(), u.begin() + static_cast<std::ptrdiff_t>(rest));
+        std::vector<double> points(u.begin(), u.begin() + static_cast<std::ptrdiff_t>(rest));
         std::sort(points.begin(), points.end());
-        inverse_cdf(residual, points, out);
+        inverse_cdf(
+            residual, rest, [&](std::size_t k) { return points[k]; }, out);
         std::sort(out.begin(), out.end());
       }
       break;
     }
   }
+}
+
+std::vector<std::size_t> resample(ResamplingScheme scheme, std::span<const double> w,
+                                  std::span<const double> u, std::size_t n) {
+  std::vector<std::size_t> out;
+  resample(scheme, w, u, n, out);
   return out;
 }
 

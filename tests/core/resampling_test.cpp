@@ -208,6 +208,18 @@ TEST(Resampling, RngOverloadUsesTheSameUniforms) {
   }
 }
 
+TEST(Resampling, OutputOverloadReusesTheVector) {
+  // The out-parameter overload gives the same ancestors and clears what was there before.
+  Rng wr({.seed = 7, .step = 0, .index = 0, .purpose = purpose::kUser});
+  const auto w = random_weights(wr, 12);
+  std::vector<std::size_t> out = {99, 98, 97};
+  for (auto scheme : kAllSchemes) {
+    const auto u = uniforms(wr, scheme, 20);
+    resample(scheme, w, u, 20, out);
+    EXPECT_EQ(out, resample(scheme, w, u, 20)) << to_string(scheme);
+  }
+}
+
 TEST(Resampling, SchemeNamesRoundTrip) {
   for (auto scheme : kAllSchemes) EXPECT_EQ(parse_resampling_scheme(to_string(scheme)), scheme);
 }

@@ -54,16 +54,23 @@ class MixtureProposal {
     return cumulative_.size() - 1;
   }
 
-  /// log q(x).
+  /// log q(x). Streaming log-sum-exp over the components: no allocation per call.
   double log_density(const Vec<N>& x) const {
-    std::vector<double> terms(components_.size());
     const double m = static_cast<double>(x.size());
+    double top = -std::numeric_limits<double>::infinity(), sum = 0.0;
     for (std::size_t k = 0; k < components_.size(); ++k) {
       const auto& c = components_[k];
       const Vec<N> v = c.L.transpose() * (x - c.mu);
-      terms[k] = log_pi_[k] - 0.5 * m * kLog2Pi + c.log_det_L - 0.5 * v.squaredNorm();
+      const double t = log_pi_[k] - 0.5 * m * kLog2Pi + c.log_det_L - 0.5 * v.squaredNorm();
+      if (!(t > -std::numeric_limits<double>::infinity())) continue;  // zero density (or NaN x)
+      if (t > top) {
+        sum = sum * std::exp(top - t) + 1.0;
+        top = t;
+      } else {
+        sum += std::exp(t - top);
+      }
     }
-    return log_sum_exp(terms);
+    return sum > 0.0 ? top + std::log(sum) : -std::numeric_limits<double>::infinity();
   }
 
   /// Samples with component choice u and reference variable xi; returns log w.

@@ -25,7 +25,8 @@ namespace implicit {
 enum class ResamplingScheme { kMultinomial, kSystematic, kStratified, kResidual };
 
 std::string_view to_string(ResamplingScheme s);
-/// Parses "multinomial", "systematic", "stratified" or "residual"; throws InvalidArgument otherwise.
+/// Parses "multinomial", "systematic", "stratified" or "residual"; throws InvalidArgument
+/// otherwise.
 ResamplingScheme parse_resampling_scheme(std::string_view name);
 
 /// Number of uniforms resample() consumes for n output particles.
@@ -37,9 +38,14 @@ std::size_t uniforms_needed(ResamplingScheme scheme, std::size_t n);
 std::vector<std::size_t> resample(ResamplingScheme scheme, std::span<const double> w,
                                   std::span<const double> uniforms, std::size_t n);
 
+/// As above, writing the ancestors into `out` (cleared first). Its capacity is reused, so a
+/// filter that resamples every step allocates nothing after the first step.
+void resample(ResamplingScheme scheme, std::span<const double> w, std::span<const double> uniforms,
+              std::size_t n, std::vector<std::size_t>& out);
+
 /// As above, drawing the uniforms from `rng`.
-std::vector<std::size_t> resample(ResamplingScheme scheme, std::span<const double> w,
-                                  std::size_t n, Rng& rng);
+std::vector<std::size_t> resample(ResamplingScheme scheme, std::span<const double> w, std::size_t n,
+                                  Rng& rng);
 
 /// True when ess < threshold * m. threshold must be in [0, 1] (1/2 is the usual choice).
 bool needs_resampling(double ess, std::size_t m, double threshold);
