@@ -71,6 +71,15 @@ void SlamOptions::validate() const {
 
 namespace {
 
+KnownLandmark known_landmark(std::size_t slot, const Measurement& z, const LandmarkEstimate& l) {
+  KnownLandmark k;
+  k.slot = slot;
+  k.z = z;
+  k.mean = l.mean;
+  k.cov = l.cov;
+  return k;
+}
+
 void check_observation(std::uint64_t n, const Observation& o) {
   require(std::isfinite(o.z(0)) && std::isfinite(o.z(1)),
           "SLAM step {}: expected a finite observation, got (range {}, bearing {})", n, o.z(0),
@@ -192,12 +201,6 @@ struct Particle {
   Pose x = Pose::Zero();
   LandmarkMap map;
   double log_w = 0.0;
-};
-
-struct KnownObservation {
-  std::size_t slot = 0;
-  Measurement z = Measurement::Zero();
-  LandmarkEstimate landmark;
 };
 
 struct ParticleOutcome {
@@ -365,7 +368,7 @@ class ParticleSlamFilter final : public SlamFilter {
   // One particle's move, proposal, weight and map update. Writes only to slot j.
   void step_particle(std::size_t j, std::uint64_t n, const Control& u,
                      std::span<const Observation> obs, std::size_t slots_before) {
-    thread_local std::vector<KnownObservation> known;
+    thread_local std::vector<KnownLandmark> known;
     thread_local std::vector<Measurement> fresh;
     thread_local std::vector<LandmarkTerm> terms;
     known.clear();
@@ -391,7 +394,7 @@ class ParticleSlamFilter final : public SlamFilter {
         if (slot >= slots_before)
           fresh.push_back(obs[i].z);
         else
-          known.push_back({slot, obs[i].z, p.map.get(slot)});
+          known.push_back(known_landmark(slot, obs[i].z, p.map.get(slot)));
         continue;
       }
       const auto a = robot::associate_max_likelihood(
@@ -411,7 +414,7 @@ class ParticleSlamFilter final : public SlamFilter {
           opt_.gate_chi2);
       if (a.matched()) {
         const auto slot = static_cast<std::size_t>(a.index);
-        known.push_back({slot, obs[i].z, p.map.get(slot)});
+        known.push_back(known_landmark(slot, obs[i].z, p.map.get(slot)));
       } else {
         fresh.push_back(obs[i].z);
       }
@@ -451,51 +454,23 @@ class ParticleSlamFilter final : public SlamFilter {
     } else if (opt_.method == SlamMethod::kFastSlam1) {
       x = f + llt1.matrixL() * rng.normal_vector<3>();
       for (const auto& k : known) {
-        const Mat<2> hm = s.jacobian_landmark(x, k.landmark.mean);
-        const Eigen::LLT<Mat<2>> llt(hm * k.landmark.cov * hm.transpose() + r);
-        const Measurement nu = -RangeBearingSensor::residual(s.predict(x, k.landmark.mean), k.z);
+        const Mat<2> hm = s.jacobian_landmark(x, k.mean);
+        const Eigen::LLT<Mat<2>> llt(hm * k.cov * hm.transpose() + r);
+        const Measurement nu = -RangeBearingSensor::residual(s.predict(x, k.mean), k.z);
         log_inc += llt.info() == Eigen::Success ? log_normal2(nu, llt)
                                                 : -std::numeric_limits<double>::infinity();
       }
     } else if (opt_.method == SlamMethod::kFastSlam2) {
-      // Linearised optimal proposal at f (all known detections jointly) and its exact weight
-      // N(nu; 0, H_x Sigma1 H_x^T + Q) via the information form.
-      Mat<3> lambda = llt1.solve(Mat<3>::Identity());
-      Vec<3> b = Vec<3>::Zero();
-      double quad = 0.0, log_det_q = 0.0;
-      bool ok = true;
-      for (const auto& k : known) {
-        const Mat23 hx = s.jacobian_pose(f, k.landmark.mean);
-        const Mat<2> hm = -hx.leftCols<2>();
-        const Eigen::LLT<Mat<2>> llt(hm * k.landmark.cov * hm.transpose() + r);
-        if (llt.info() != Eigen::Success) {
-          ok = false;
-          break;
-        }
-        const Measurement nu = -RangeBearingSensor::residual(s.predict(f, k.landmark.mean), k.z);
-        const Vec<2> qnu = llt.solve(nu);
-        lambda.noalias() += hx.transpose() * llt.solve(hx);
-        b.noalias() += hx.transpose() * qnu;
-        quad += nu.dot(qnu);
-        const Mat<2> l = llt.matrixL();
-        log_det_q += 2.0 * (std::log(l(0, 0)) + std::log(l(1, 1)));
-      }
-      lambda = 0.5 * (lambda + lambda.transpose()).eval();
-      const Eigen::LLT<Mat<3>> lltl(lambda);
-      if (!ok || lltl.info() != Eigen::Success) {
+      // Linearised optimal proposal at f; its weight includes the pose term H_x Sigma1 H_x^T.
+      const LinearizedProposal lp = linearized_optimal_proposal(s, f, llt1, known);
+      if (!lp.ok) {
         p.x = f;
         p.log_w = -std::numeric_limits<double>::infinity();
         return;
       }
-      const Vec<3> shift = lltl.solve(b);
-      const Mat<3> ll = lltl.matrixL();
-      const Mat<3> l1 = llt1.matrixL();
-      const double log_det_sigma1 = 2.0 * l1.diagonal().array().log().sum();
-      const double log_det_lambda = 2.0 * ll.diagonal().array().log().sum();
-      log_inc = -0.5 * (quad - b.dot(shift)) - 0.5 * (log_det_q + log_det_sigma1 + log_det_lambda) -
-                static_cast<double>(known.size()) * kLog2Pi;
       const Vec<3> xi = rng.normal_vector<3>();
-      x = f + shift + ll.transpose().triangularView<Eigen::Upper>().solve(xi);
+      x = lp.mean + lp.L.transpose().triangularView<Eigen::Upper>().solve(xi);
+      log_inc = lp.log_weight;
     } else {
       // Implicit: (A) point landmarks with S = Sigma2, (B) EKF landmarks with S frozen at f.
       terms.resize(known.size());
@@ -504,10 +479,10 @@ class ParticleSlamFilter final : public SlamFilter {
         const auto& k = known[i];
         Mat<2> sk = r;
         if (!point_landmarks) {
-          const Mat<2> hm = s.jacobian_landmark(f, k.landmark.mean);
-          sk += hm * k.landmark.cov * hm.transpose();
+          const Mat<2> hm = s.jacobian_landmark(f, k.mean);
+          sk += hm * k.cov * hm.transpose();
         }
-        ok = ok && terms[i].set(k.landmark.mean, k.z, sk);
+        ok = ok && terms[i].set(k.mean, k.z, sk);
       }
       const PoseObjective F(f, sigma1, terms);
       const PoseLaplace lp = ok ? minimize_pose_objective(F, f, opt_.newton_max_iterations,
@@ -535,7 +510,7 @@ class ParticleSlamFilter final : public SlamFilter {
     // Map: EKF updates of the known landmarks at the sampled pose (not in (A)), new landmarks.
     if (!point_landmarks) {
       for (const auto& k : known) {
-        LandmarkEstimate l = k.landmark;
+        LandmarkEstimate l{k.mean, k.cov};
         const Mat<2> hm = s.jacobian_landmark(x, l.mean);
         const Eigen::LLT<Mat<2>> llt(hm * l.cov * hm.transpose() + r);
         if (llt.info() != Eigen::Success) continue;

@@ -24,6 +24,7 @@
 // line search treats it as a failed step).
 
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <span>
 
@@ -190,6 +191,65 @@ inline PoseLaplace minimize_pose_objective(const PoseObjective& F, const Vec<3>&
   out.L = llt.matrixL();
   out.log_det_L = out.L.diagonal().array().log().sum();
   out.ok = std::isfinite(out.log_det_L) && x.allFinite();
+  return out;
+}
+
+/// A detection z of a known landmark whose estimate is N(mean, cov) (cov = 0: point landmark).
+struct KnownLandmark {
+  std::size_t slot = 0;  ///< index in the particle's map
+  Vec<2> z = Vec<2>::Zero();
+  Vec<2> mean = Vec<2>::Zero();
+  Mat<2> cov = Mat<2>::Zero();
+};
+
+/// FastSLAM 2.0's proposal: the measurement model linearised at the prediction f (Montemerlo et
+/// al. 2003), all detections jointly:
+///   Lambda = Sigma1^-1 + sum_i H_x,i^T Q_i^-1 H_x,i,   Q_i = Sigma2 + H_m,i P_i H_m,i^T,
+///   mean = f + Lambda^-1 sum_i H_x,i^T Q_i^-1 nu_i,   nu_i = wrap(z_i - h(f, m_i)),
+/// and the weight increment log N(nu; 0, H_x Sigma1 H_x^T + blockdiag(Q_i)), evaluated in the
+/// information form (Woodbury; no inverse of the stacked covariance).
+struct LinearizedProposal {
+  Vec<3> mean = Vec<3>::Zero();
+  Mat<3> L = Mat<3>::Identity();  ///< lower Cholesky factor of Lambda (sample mean + L^-T xi)
+  double log_weight = 0.0;
+  bool ok = false;
+};
+
+inline LinearizedProposal linearized_optimal_proposal(const robot::RangeBearingSensor& sensor,
+                                                      const Vec<3>& f,
+                                                      const Eigen::LLT<Mat<3>>& sigma1_llt,
+                                                      std::span<const KnownLandmark> known) {
+  LinearizedProposal out;
+  const Mat<2>& r = sensor.noise_covariance();
+  Mat<3> lambda = sigma1_llt.solve(Mat<3>::Identity());
+  Vec<3> b = Vec<3>::Zero();
+  double quad = 0.0, log_det_q = 0.0;
+  for (const auto& k : known) {
+    const Eigen::Matrix<double, 2, 3> hx = sensor.jacobian_pose(f, k.mean);
+    const Mat<2> hm = -hx.leftCols<2>();
+    const Eigen::LLT<Mat<2>> llt(hm * k.cov * hm.transpose() + r);
+    if (llt.info() != Eigen::Success) return out;
+    const Vec<2> nu = -robot::RangeBearingSensor::residual(sensor.predict(f, k.mean), k.z);
+    const Vec<2> qnu = llt.solve(nu);
+    lambda.noalias() += hx.transpose() * llt.solve(hx);
+    b.noalias() += hx.transpose() * qnu;
+    quad += nu.dot(qnu);
+    const Mat<2> l = llt.matrixL();
+    log_det_q += 2.0 * (std::log(l(0, 0)) + std::log(l(1, 1)));
+  }
+  lambda = 0.5 * (lambda + lambda.transpose()).eval();
+  const Eigen::LLT<Mat<3>> lltl(lambda);
+  if (lltl.info() != Eigen::Success) return out;
+  const Vec<3> shift = lltl.solve(b);
+  out.L = lltl.matrixL();
+  const Mat<3> l1 = sigma1_llt.matrixL();
+  // det(H Sigma1 H^T + Q) = det Q det Sigma1 det Lambda; quadratic form by Woodbury.
+  const double log_det = log_det_q + 2.0 * l1.diagonal().array().log().sum() +
+                         2.0 * out.L.diagonal().array().log().sum();
+  out.log_weight =
+      -0.5 * (quad - b.dot(shift)) - 0.5 * log_det - static_cast<double>(known.size()) * kLog2Pi;
+  out.mean = f + shift;
+  out.ok = std::isfinite(out.log_weight) && out.mean.allFinite();
   return out;
 }
 
