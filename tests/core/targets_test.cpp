@@ -134,6 +134,24 @@ TEST(Targets, CheckerNamesWrongGradientEntryAndNaN) {
   EXPECT_THAT(c.describe(), HasSubstr("worst gradient entry 2"));
 }
 
+TEST(Targets, CheckerReportsEntriesAnAnalyticFunctorForgets) {
+  // A dynamic-size analytic functor that fills only the diagonal of the Hessian: the checker
+  // pre-fills with NaN, so the forgotten off-diagonal entries are reported, not read as garbage.
+  const auto partial = make_analytic_target<Eigen::Dynamic>(
+      [](const Eigen::VectorXd& x, Eigen::VectorXd* g, Eigen::MatrixXd* h) {
+        if (g) *g = x;
+        if (h)
+          for (Eigen::Index i = 0; i < x.size(); ++i) (*h)(i, i) = 1.0;
+        return 0.5 * x.squaredNorm() + x(0) * x(1);
+      },
+      2);
+  const DerivativeCheck c = check_derivatives(
+      partial, [](const auto& x) { return 0.5 * (x(0) * x(0) + x(1) * x(1)) + x(0) * x(1); },
+      Eigen::VectorXd::Ones(2));
+  EXPECT_FALSE(c.ok(1.0));
+  EXPECT_NE(c.hessian_row, c.hessian_col);  // an off-diagonal entry
+}
+
 TEST(Targets, DynamicSizeMatchesFixedSize) {
   // The same model with run-time dimension: values and derivatives identical to the fixed one
   // up to round-off (different summation order inside Eigen is allowed: 1e-13).

@@ -3,7 +3,8 @@
 //
 // Implicit sampling starts at mu = argmin F. This minimiser is written for small dense problems
 // evaluated once per particle (fixed-size Eigen types, no allocation when N is fixed), so it
-// never throws: the outcome is a MinimizeStatus in the result. For long paths with
+// never throws on an algorithm outcome: that is a MinimizeStatus in the result (only a start
+// point of the wrong dimension, a programming error, throws InvalidArgument). For long paths with
 // block-tridiagonal Hessians see implicit/core/banded.hpp.
 //
 //   auto r = implicit::minimize(target, x0);
@@ -35,11 +36,16 @@ enum class MinimizeStatus {
 
 inline std::string_view to_string(MinimizeStatus s) {
   switch (s) {
-    case MinimizeStatus::kConverged: return "converged";
-    case MinimizeStatus::kMaxIterations: return "max_iterations";
-    case MinimizeStatus::kNonFinite: return "non_finite";
-    case MinimizeStatus::kNotPositiveDefinite: return "not_positive_definite";
-    case MinimizeStatus::kLineSearchFailed: return "line_search_failed";
+    case MinimizeStatus::kConverged:
+      return "converged";
+    case MinimizeStatus::kMaxIterations:
+      return "max_iterations";
+    case MinimizeStatus::kNonFinite:
+      return "non_finite";
+    case MinimizeStatus::kNotPositiveDefinite:
+      return "not_positive_definite";
+    case MinimizeStatus::kLineSearchFailed:
+      return "line_search_failed";
   }
   return "unknown";
 }
@@ -54,10 +60,10 @@ struct MinimizeOptions {
 
 template <int N>
 struct MinimizeResult {
-  Vec<N> x;         ///< the minimiser (or the last iterate)
+  Vec<N> x;                                                 ///< the minimiser (or the last iterate)
   double value = std::numeric_limits<double>::quiet_NaN();  ///< F(x)
-  Vec<N> gradient;  ///< grad F(x)
-  Mat<N> hessian;   ///< Hessian of F at x (exact, possibly indefinite)
+  Vec<N> gradient;                                          ///< grad F(x)
+  Mat<N> hessian;  ///< Hessian of F at x (exact, possibly indefinite)
   int iterations = 0;
   int evaluations = 0;
   MinimizeStatus status = MinimizeStatus::kMaxIterations;
@@ -80,14 +86,15 @@ MinimizeResult<T::Dim> minimize(const T& f, const typename T::Vector& x0,
   using V = Vec<N>;
   using M = Mat<N>;
   const int n = f.dim();
+  // A start point of the wrong size is bad input (evaluating F there would read out of bounds).
+  require(x0.size() == n, "minimize: expected a start point of dimension {}, got {}", n, x0.size());
   MinimizeResult<N> r;
   r.x = x0;
   r.gradient.resize(n);
   r.hessian.resize(n, n);
   r.value = f.evaluate(r.x, &r.gradient, &r.hessian);
   r.evaluations = 1;
-  if (x0.size() != n || !detail::all_finite(r.value) || !r.gradient.allFinite() ||
-      !r.hessian.allFinite()) {
+  if (!detail::all_finite(r.value) || !r.gradient.allFinite() || !r.hessian.allFinite()) {
     r.status = MinimizeStatus::kNonFinite;
     return r;
   }

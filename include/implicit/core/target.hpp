@@ -1,5 +1,6 @@
 #pragma once
-// Targets: a negative log density F(x) = -log p(x) (up to a constant) with its gradient and Hessian.
+// Targets: a negative log density F(x) = -log p(x) (up to a constant) with its gradient and
+// Hessian.
 //
 // Implicit sampling needs F, grad F and the Hessian. A Target is any type with
 //
@@ -12,8 +13,8 @@
 // to build one from a user model, as in Ceres (one model, three derivative strategies):
 //
 //   auto a = make_analytic_target<2>(fn);     // fn(x, grad*, hess*) -> F: you supply derivatives
-//   auto b = make_autodiff_target<2>(model);  // model(x) templated on the scalar: exact derivatives
-//   auto c = make_numeric_target<2>(fn);      // fn(x) -> F: central finite differences
+//   auto b = make_autodiff_target<2>(model);  // model(x) templated on the scalar: exact
+//   derivatives auto c = make_numeric_target<2>(fn);      // fn(x) -> F: central finite differences
 //
 // Fixed sizes allocate nothing per evaluation. Common mistakes: forgetting that F is a NEGATIVE
 // log density (a sign error makes the minimiser climb), and dropping factors 1/2 of Gaussians.
@@ -183,8 +184,14 @@ struct DerivativeCheck {
 template <Target T, typename Model>
 DerivativeCheck check_derivatives(const T& target, const Model& model,
                                   const typename T::Vector& x) {
-  typename T::Vector g;
-  typename T::Matrix h;
+  require(x.size() == target.dim(), "check_derivatives: expected a point of dimension {}, got {}",
+          target.dim(), x.size());
+  // Pre-sized (and NaN-filled), so analytic functors for dynamic sizes need not resize and
+  // entries they forget to set are reported instead of read uninitialised.
+  typename T::Vector g =
+      T::Vector::Constant(target.dim(), std::numeric_limits<double>::quiet_NaN());
+  typename T::Matrix h =
+      T::Matrix::Constant(target.dim(), target.dim(), std::numeric_limits<double>::quiet_NaN());
   const double f = target.evaluate(x, &g, &h);
   auto [fa, ga, ha] = autodiff_hessian<T::Dim>(model, x);
   DerivativeCheck c;
