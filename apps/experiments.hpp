@@ -45,6 +45,10 @@ struct MclSettings {
   std::string data_dir;             ///< empty: the bundled Car Park data
   std::string config = "A";         ///< noise setting: "A" (P = 0.5) or "B" (P = 0.1)
   double p = -1.0;                  ///< override P (both diagonal entries); < 0: from config
+  double q = -1.0;                  ///< override Q position entries q1 = q2 [m]; < 0: 0.1
+  std::string map = "linear";       ///< implicit proposal: "linear" or "random" map
+  bool clutter = true;              ///< dropped detections contribute the clutter density p0
+  std::string sigma2 = "variance";  ///< reading of Table 7's Sigma2: "variance" or "std"
 };
 /// Keys: method, particles, runs, config, error_percent_mean/std/median, rmse_m,
 /// heading_rmse_rad, ess_mean, cpu_ms_per_step, detections_used, detections_dropped, lost_runs,

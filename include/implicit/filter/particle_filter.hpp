@@ -56,7 +56,7 @@ struct StepSummary {
   std::size_t step = 0;  ///< 1-based step counter
   Pose mean = Pose::Zero();
   Mat3 covariance = Mat3::Zero();
-  double ess = 0.0;
+  double ess = 0.0;  ///< at update steps: after weighting, before any resampling
   bool resampled = false;
   bool updated = false;                   ///< detections were processed at this step
   double log_likelihood_increment = 0.0;  ///< 0 at prediction-only steps
@@ -154,6 +154,9 @@ class ParticleFilter {
               "({}, {}) for landmark {}",
               map_.size(), lz.z(0), lz.z(1), lz.landmark);
     ++step_;
+    context_.motion = &motion_;  // refreshed: the filter may have been moved since construction
+    context_.sensor = &sensor_;
+    context_.map = std::span<const Landmark>(map_.positions());
     context_.u = u;
     context_.z = z;
     const std::uint64_t n = step_;
@@ -216,6 +219,7 @@ class ParticleFilter {
       }
     }
     const double ess = effective_sample_size(weights_);
+    summary_.ess = ess;  // before resampling: the quality of this update's weights
     if (needs_resampling(ess, m, options_.resample_threshold)) {
       Rng rng({options_.seed, step_, 0, purpose::kResampling});
       const std::vector<std::size_t> idx = resample(options_.resampling, weights_, m, rng);
@@ -244,7 +248,7 @@ class ParticleFilter {
     }
     summary_.mean = mean;
     summary_.covariance = cov;
-    summary_.ess = effective_sample_size(weights_);
+    if (!summary_.updated) summary_.ess = effective_sample_size(weights_);
   }
 
   Motion motion_;

@@ -1,0 +1,93 @@
+#include "implicit/filter/localization.hpp"
+
+#include <algorithm>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/weights.hpp"
+
+namespace implicit::filter {
+
+LocalizationProblem make_problem(const robot::RobotLog& log, double dt) {
+  require(log.initial.has_value(),
+          "localization: expected an 'initial' record (prior pose) in the log, got none");
+  require(!log.controls.empty(), "localization: expected 'control' records in the log, got none");
+  require(!log.landmarks.empty(), "localization: expected 'landmark' records (the map), got none");
+  LocalizationProblem p;
+  p.map = log.landmarks;
+  p.initial_mean = log.initial->mean;
+  p.initial_covariance = log.initial->std.cwiseAbs2().asDiagonal();
+  p.schedule = robot::make_schedule(log, log.initial->time, 0.5 * dt);
+  require(!p.schedule.steps.empty(), "localization: expected controls after the initial time {}",
+          log.initial->time);
+  p.detections.resize(p.schedule.steps.size());
+  for (std::size_t n = 0; n < p.schedule.steps.size(); ++n) {
+    const int scan = p.schedule.steps[n].scan;
+    if (scan < 0) continue;
+    for (const robot::Observation& o : log.scans[static_cast<std::size_t>(scan)].observations) {
+      p.detections[n].push_back({o.z, o.landmark_id >= 0 ? p.map.index_of(o.landmark_id) : -1});
+      ++p.detections_total;
+    }
+  }
+  p.truth = robot::interpolate_truth(log, p.schedule);
+  return p;
+}
+
+LocalizationMetrics localization_metrics(const LocalizationRun& run, const robot::TruthTrack& truth,
+                                         std::size_t particles) {
+  require(run.steps.size() == truth.position.size(),
+          "localization metrics: expected {} truth entries, got {}", run.steps.size(),
+          truth.position.size());
+  LocalizationMetrics m;
+  double num = 0.0, den = 0.0, hsum = 0.0;
+  int n = 0, nh = 0, updates = 0;
+  double ess = 0.0, newton = 0.0;
+  for (std::size_t k = 0; k < run.steps.size(); ++k) {
+    const StepSummary& s = run.steps[k];
+    m.detections_used += s.detections_used;
+    m.detections_dropped += s.detections_dropped;
+    m.fallbacks += s.fallbacks;
+    m.failures += s.failures;
+    if (s.updated) {
+      ess += s.ess / static_cast<double>(particles);
+      newton += s.newton_evaluations;
+      m.min_log_likelihood_increment =
+          updates == 0 ? s.log_likelihood_increment
+                       : std::min(m.min_log_likelihood_increment, s.log_likelihood_increment);
+      ++updates;
+    }
+    const Vec<2>& p = truth.position[k];
+    if (!p.allFinite()) continue;
+    const double e2 = (s.mean.head<2>() - p).squaredNorm();
+    num += e2;
+    den += p.squaredNorm();
+    m.max_error = std::max(m.max_error, std::sqrt(e2));
+    ++n;
+    if (std::isfinite(truth.heading[k])) {
+      hsum += std::pow(wrap_angle(s.mean(2) - truth.heading[k]), 2);
+      ++nh;
+    }
+  }
+  require(n > 0, "localization metrics: expected steps with ground truth, got none");
+  m.error_percent = 100.0 * std::sqrt(num) / std::sqrt(den);
+  m.rmse = std::sqrt(num / n);
+  if (nh > 0) m.heading_rmse = std::sqrt(hsum / nh);
+  if (updates > 0) {
+    m.ess_fraction = ess / updates;
+    m.newton_evaluations = newton / updates;
+  }
+  return m;
+}
+
+double error_percent(const std::vector<Pose>& estimate, const robot::TruthTrack& truth) {
+  require(estimate.size() == truth.position.size(), "error_percent: expected {} estimates, got {}",
+          truth.position.size(), estimate.size());
+  double num = 0.0, den = 0.0;
+  for (std::size_t k = 0; k < estimate.size(); ++k) {
+    if (!truth.position[k].allFinite()) continue;
+    num += (estimate[k].head<2>() - truth.position[k]).squaredNorm();
+    den += truth.position[k].squaredNorm();
+  }
+  return 100.0 * std::sqrt(num / den);
+}
+
+}  // namespace implicit::filter
