@@ -20,6 +20,7 @@
 //                  Pose& next, ParticleStats&) const;
 // returning the log weight increment (-inf: weight zero). It must not allocate or throw.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -60,6 +61,7 @@ struct ParticleStats {
 /// Everything a proposal needs at one step; built by the engine, shared by all particles.
 template <robot::MotionModel Motion, robot::LandmarkSensor Sensor>
 struct ProposalContext {
+  using SensorType = Sensor;
   const Motion* motion = nullptr;
   const Sensor* sensor = nullptr;
   std::span<const Landmark> map;
@@ -93,11 +95,22 @@ template <typename Ctx>
 int associate(const Ctx& ctx, const Pose& x, const Mat3* pose_cov, const Measurement& z) {
   const Mat2& noise = ctx.sensor->noise_covariance();
   const double min_r2 = ctx.association.min_range * ctx.association.min_range;
+  // Exact range pre-gate (see RangeFirstSensor): skips most landmarks without an atan2.
+  const double range_bound =
+      ctx.association.gate *
+      (noise(0, 0) + (pose_cov ? (*pose_cov)(0, 0) + (*pose_cov)(1, 1) : 0.0));
+  const double range_tol = std::sqrt(range_bound);
   return robot::associate_max_likelihood(
              static_cast<int>(ctx.map.size()),
              [&](int i, Measurement& e, Mat2& s) {
                const Landmark& m = ctx.map[static_cast<std::size_t>(i)];
                if ((m - x.template head<2>()).squaredNorm() < min_r2) return false;
+               if constexpr (robot::RangeFirstSensor<typename Ctx::SensorType>) {
+                 // |r - z_r| <= sqrt(bound), compared on squared distances (no square root).
+                 const double d2 = (m - x.template head<2>()).squaredNorm();
+                 const double lo = std::max(0.0, z(0) - range_tol), hi = z(0) + range_tol;
+                 if (d2 < lo * lo || d2 > hi * hi) return false;
+               }
                e = ctx.sensor->residual(ctx.sensor->predict(x, m), z);
                if (pose_cov) {
                  const Mat23 h = ctx.sensor->jacobian_pose(x, m);

@@ -54,7 +54,18 @@ concept LandmarkSensorWithHessian = LandmarkSensor<S> &&
   s.hessian_pose(x, m, h, h);
 };
 
+/// A landmark sensor whose first component is the Euclidean range |m - p| (unit gradient in the
+/// position, none in the heading), available alone via range(x, m). Data association then rejects
+/// a landmark when (range - z_0)^2 > gate * (Sigma2_00 + trace of the pose position covariance),
+/// which is exact: d^2 >= e_0^2 / S_00 for any 2x2 SPD S, and S_00 is at most that bound.
+template <typename S>
+concept RangeFirstSensor = LandmarkSensor<S> &&
+    requires(const S& s, const Pose& x, const Landmark& m) {
+  { s.range(x, m) } -> std::convertible_to<double>;
+};
+
 static_assert(MotionModel<UteModel>);
+static_assert(RangeFirstSensor<RangeBearingSensor>);
 static_assert(LandmarkSensorWithHessian<RangeBearingSensor>);
 
 }  // namespace implicit::robot

@@ -56,6 +56,12 @@ class RangeBearingSensor {
     return Measurement(std::hypot(dx, dy), std::atan2(dy, dx) - x(2) + kPi / 2.0);
   }
 
+  /// The predicted range alone (first component of predict()), cheaper than predict(): lets
+  /// data association skip landmarks whose range cannot pass the gate before any atan2.
+  double range(const Pose& x, const Landmark& m) const {
+    return std::hypot(m(0) - x(0), m(1) - x(1));
+  }
+
   /// e = (r_hat - z_r, wrap(b_hat - z_b)).
   static Measurement residual(const Measurement& predicted, const Measurement& z) {
     return Measurement(predicted(0) - z(0), wrap_angle(predicted(1) - z(1)));

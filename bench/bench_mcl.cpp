@@ -1,0 +1,150 @@
+// Monte Carlo localization costs (paper Table 5's CPU column, spec §3.9 targets):
+//  * one laser update of one particle, bootstrap vs implicit, 1 / 3 / 6 landmarks in view
+//    (unlabelled detections, association over a 15-landmark map included);
+//  * one prediction-only step of one particle;
+//  * a whole Car Park run (5000 steps, 505 scans) at M = 100 and M = 10 000, 1 and 2 threads.
+// Per-particle benchmarks: one iteration = one particle (read the CPU column). Whole runs: the
+// counter ms_per_step (wall time of the filter loop / 5000 steps).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <vector>
+
+#include <Eigen/LU>
+
+#include "implicit/core/parallel.hpp"
+#include "implicit/filter/localization.hpp"
+#include "implicit/robot/carpark.hpp"
+
+namespace {
+
+using namespace implicit;
+using filter::LabelledMeasurement;
+using robot::Landmark;
+using robot::Measurement;
+using robot::Pose;
+
+struct UpdateFixture {
+  robot::UteModel model;
+  robot::RangeBearingSensor sensor;
+  std::vector<Landmark> map;
+  std::vector<LabelledMeasurement> z;
+  std::vector<Pose> previous;
+  filter::ProposalContext<robot::UteModel, robot::RangeBearingSensor> ctx;
+
+  explicit UpdateFixture(int in_view) {
+    const Pose truth(0.0, 0.0, kPi / 2);  // heading north: bearing pi/2 is straight ahead
+    for (int k = 0; k < 15; ++k) {
+      if (k < in_view) {
+        const double a = kPi / 2 + 0.8 * (k - 0.5 * (in_view - 1)) / std::max(1, in_view);
+        map.emplace_back(8.0 * std::cos(a) + 0.3 * k, 8.0 * std::sin(a) + 0.5 * k);
+      } else {
+        map.emplace_back(-40.0 + 6.0 * k, -30.0);  // behind: never gated
+      }
+    }
+    for (int k = 0; k < in_view; ++k) {
+      Measurement h = sensor.predict(truth, map[static_cast<std::size_t>(k)]);
+      h += Vec<2>(0.1 * std::sin(k + 1.0), 0.01 * std::cos(k + 1.0));
+      z.push_back({h, -1});
+    }
+    const Pose before = truth - model.dt() * model.rate(truth, robot::Control(3.0, 0.05));
+    for (int j = 0; j < 1024; ++j)
+      previous.push_back(
+          before + Vec<3>(0.1 * std::sin(j), 0.1 * std::cos(1.3 * j), 0.01 * std::sin(0.7 * j)));
+    ctx.motion = &model;
+    ctx.sensor = &sensor;
+    ctx.map = map;
+    ctx.noise_information = sensor.noise_covariance().llt().solve(robot::Mat2::Identity());
+    ctx.log_det_noise = std::log(sensor.noise_covariance().determinant());
+    ctx.log_clutter = robot::clutter_log_density(ctx.association.gate, sensor.noise_covariance());
+    ctx.u = robot::Control(3.0, 0.05);
+    ctx.z = z;
+  }
+};
+
+template <typename Proposal>
+void BM_LaserUpdatePerParticle(benchmark::State& state) {
+  UpdateFixture f(static_cast<int>(state.range(0)));
+  const Proposal proposal{};
+  std::uint64_t j = 0;
+  double sink = 0.0;
+  for (auto _ : state) {
+    Rng rng({1, 1, j, Proposal::kPurpose});
+    filter::ParticleStats st;
+    Pose next;
+    sink += proposal.propose(f.ctx, f.previous[j & 1023], rng, next, st);
+    benchmark::DoNotOptimize(next);
+    ++j;
+  }
+  benchmark::DoNotOptimize(sink);
+}
+BENCHMARK(BM_LaserUpdatePerParticle<filter::BootstrapProposal>)->Arg(1)->Arg(3)->Arg(6);
+BENCHMARK(BM_LaserUpdatePerParticle<filter::ImplicitProposal>)->Arg(1)->Arg(3)->Arg(6);
+
+template <typename Proposal>
+void BM_PredictionPerParticle(benchmark::State& state) {
+  UpdateFixture f(0);
+  f.ctx.z = {};
+  const Proposal proposal{};
+  std::uint64_t j = 0;
+  for (auto _ : state) {
+    Rng rng({1, 1, j, Proposal::kPurpose});
+    filter::ParticleStats st;
+    Pose next;
+    benchmark::DoNotOptimize(proposal.propose(f.ctx, f.previous[j & 1023], rng, next, st));
+    benchmark::DoNotOptimize(next);
+    ++j;
+  }
+}
+BENCHMARK(BM_PredictionPerParticle<filter::BootstrapProposal>);
+BENCHMARK(BM_PredictionPerParticle<filter::ImplicitProposal>);
+
+const filter::LocalizationProblem& carpark() {
+  static const filter::LocalizationProblem p = [] {
+    const robot::UteModel model;
+    return filter::make_problem(
+        robot::carpark_to_log(robot::load_carpark(robot::default_carpark_dir()), model),
+        model.dt());
+  }();
+  return p;
+}
+
+// Whole Car Park run, config A; args: particles, threads.
+template <typename Proposal>
+void BM_CarParkRun(benchmark::State& state) {
+  const auto& problem = carpark();
+  const robot::UteModel model;
+  const robot::RangeBearingSensor sensor;
+  filter::FilterOptions options;
+  options.particles = static_cast<std::size_t>(state.range(0));
+  ThreadLimit limit(static_cast<int>(state.range(1)));
+  double wall = 0.0;
+  for (auto _ : state) {
+    const auto run = filter::run_localization(problem, model, sensor, Proposal{}, options);
+    wall += run.seconds;
+    benchmark::DoNotOptimize(run.steps.back().mean);
+  }
+  state.counters["ms_per_step"] = 1e3 * wall /
+                                  (static_cast<double>(state.iterations()) *
+                                   static_cast<double>(problem.schedule.steps.size()));
+}
+BENCHMARK(BM_CarParkRun<filter::ImplicitProposal>)
+    ->Args({100, 1})
+    ->Args({100, 2})
+    ->Args({10000, 1})
+    ->Args({10000, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
+BENCHMARK(BM_CarParkRun<filter::BootstrapProposal>)
+    ->Args({100, 1})
+    ->Args({100, 2})
+    ->Args({10000, 1})
+    ->Args({10000, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
