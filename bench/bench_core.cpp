@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <span>
 #include <vector>
 
 #include "implicit/implicit.hpp"
@@ -87,8 +88,8 @@ class CoupledQuartic {
 template <int N>
 Laplace<N> laplace_of(const CoupledQuartic<N>& f) {
   const int m = f.dim();
-  Vec<N> g(m);
-  Mat<N> h(m, m);
+  Vec<N> g = Vec<N>::Zero(m);
+  Mat<N> h = Mat<N>::Zero(m, m);
   const Vec<N> mu = Vec<N>::Zero(m);
   const double phi = f.evaluate(mu, &g, &h);
   return Laplace<N>::make(mu, phi, h);
@@ -216,9 +217,14 @@ void BM_SystematicResampling(benchmark::State& state) {
   std::vector<double> lw(n), w(n);
   for (double& l : lw) l = 2.0 * rng.normal();  // log-normal weights: ESS/n ~ 0.02
   normalize_log_weights(lw, w);
-  const std::vector<double> u = {rng.uniform()};
+  // A different uniform each call, so that the branch predictor cannot learn one fixed pattern
+  // (a filter resamples fresh weights every step).
+  std::vector<double> uniforms(16);
+  for (double& x : uniforms) x = rng.uniform();
   std::vector<std::size_t> ancestors;
+  std::size_t call = 0;
   for (auto _ : state) {
+    const std::span<const double> u(&uniforms[call++ % uniforms.size()], 1);
     resample(ResamplingScheme::kSystematic, w, u, n, ancestors);
     benchmark::DoNotOptimize(ancestors.data());
   }
@@ -232,8 +238,11 @@ void BM_SystematicResamplingAllocating(benchmark::State& state) {
   std::vector<double> lw(n), w(n);
   for (double& l : lw) l = 2.0 * rng.normal();
   normalize_log_weights(lw, w);
-  const std::vector<double> u = {rng.uniform()};
+  std::vector<double> uniforms(16);
+  for (double& x : uniforms) x = rng.uniform();
+  std::size_t call = 0;
   for (auto _ : state) {
+    const std::span<const double> u(&uniforms[call++ % uniforms.size()], 1);
     const auto a = resample(ResamplingScheme::kSystematic, w, u, n);
     benchmark::DoNotOptimize(a.data());
   }

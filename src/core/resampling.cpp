@@ -77,14 +77,35 @@ void resample(ResamplingScheme scheme, std::span<const double> w, std::span<cons
               std::size_t n, std::vector<std::size_t>& out) {
   validate(w, u, uniforms_needed(scheme, n));
   out.clear();
-  out.reserve(n);
+  out.reserve(n + 1);  // the systematic scheme uses one extra slot while working
   if (n == 0) return;
   const double dn = static_cast<double>(n);
   switch (scheme) {
     case ResamplingScheme::kSystematic: {
+      // Points (k + u)/n, k = 0..n-1. Particle i takes the points below its cumulative weight
+      // C_i that particle i-1 did not take: k < e_i = ceil(n C_i - u). Instead of walking the
+      // points (a data-dependent branch per point and per particle, mispredicted for fresh
+      // weights) we mark o[e_i] = i + 1 and take a running maximum, so ancestor(k) =
+      // #{i : e_i <= k}. Branch-free, two passes; e_i is monotone in i, so this is exactly the
+      // inverse CDF, and a zero-weight particle (e_i = e_{i-1}) is never chosen. Particles after
+      // the last positive weight are excluded as in inverse_cdf.
+      std::size_t last = w.size() - 1;
+      while (last > 0 && !(w[last] > 0.0)) --last;
       const double u0 = u[0];
-      inverse_cdf(
-          w, n, [&](std::size_t k) { return (static_cast<double>(k) + u0) / dn; }, out);
+      out.assign(n + 1, 0);
+      std::size_t* o = out.data();
+      double cumulative = 0.0;
+      for (std::size_t i = 0; i < last; ++i) {
+        cumulative += w[i];
+        const double e = std::clamp(std::ceil(cumulative * dn - u0), 0.0, dn);
+        o[static_cast<std::size_t>(e)] = i + 1;
+      }
+      std::size_t ancestor = 0;
+      for (std::size_t k = 0; k < n; ++k) {
+        ancestor = std::max(ancestor, o[k]);
+        o[k] = ancestor;
+      }
+      out.pop_back();
       break;
     }
     case ResamplingScheme::kStratified:
