@@ -116,6 +116,7 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   std::vector<double> err, rmse, hrmse, ess, cpu, used, dropped, newton, max_err, resamplings,
       min_loglik;
   int lost = 0, fallbacks = 0, failures = 0;
+  std::vector<LocalizationRun> kept;  // for the trajectory CSV of the median run
   Progress bar(fmt::format("mcl {} M={}", s.method, s.particles), static_cast<std::size_t>(s.runs),
                ctx.show_progress());
   for (int r = 0; r < s.runs; ++r) {
@@ -143,15 +144,23 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
     lost += m.max_error > 5.0 ? 1 : 0;
     fallbacks += m.fallbacks;
     failures += m.failures;
-    if (r == 0 && !ctx.out_dir.empty()) {
-      std::string name = fmt::format("mcl_{}_M{}", s.method, s.particles);
-      if (s.config != "A" || s.p >= 0) name += fmt::format("_config{}", s.config);
-      if (s.p >= 0) name += fmt::format("_p{}", s.p);
-      write_trajectory(ctx.csv_path(name + "_trajectory.csv"), problem, run);
-    }
+    if (!ctx.out_dir.empty()) kept.push_back(run);
     bar.tick();
   }
   bar.finish();
+  if (!ctx.out_dir.empty()) {
+    // The run with the median err% (the lower median for an even count): a typical run, not the
+    // luckiest or a lost one.
+    std::vector<std::size_t> order(err.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return err[a] < err[b]; });
+    const std::size_t median_run = order[(order.size() - 1) / 2];
+    std::string name = fmt::format("mcl_{}_M{}", s.method, s.particles);
+    if (s.config != "A" || s.p >= 0) name += fmt::format("_config{}", s.config);
+    if (s.p >= 0) name += fmt::format("_p{}", s.p);
+    write_trajectory(ctx.csv_path(name + "_trajectory.csv"), problem, kept[median_run]);
+  }
 
   // Dead reckoning from the prior mean: the error with no laser at all.
   std::vector<Pose> dr;
