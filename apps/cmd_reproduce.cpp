@@ -181,7 +181,7 @@ Plan make_plan(bool quick, const std::vector<std::string>& only) {
     } else {
       sweeps.push_back({"ekf", {100}, 50});
       for (const auto& m : pf) sweeps.push_back({m, {100}, 50});
-      for (const auto& m : pf) sweeps.push_back({m, {10, 20, 50, 200}, 5});
+      for (const auto& m : pf) sweeps.push_back({m, {10, 20, 50, 200}, 10});
     }
     json sweep_json = json::array();
     for (const auto& sw : sweeps) {
