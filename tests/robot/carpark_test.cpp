@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "implicit/robot/carpark.hpp"
 
@@ -67,6 +68,23 @@ TEST(CarPark, ScheduleCountsOfSpec39) {
   EXPECT_EQ(s.scans_with_observations, 505);
   EXPECT_EQ(s.scans_skipped, 1);
   EXPECT_EQ(s.observations_used, 961);
+}
+
+TEST(CarPark, ConvertsToARobotLogThatRoundTrips) {
+  const UteModel model;
+  const RobotLog log = carpark_to_log(data(), model);
+  std::stringstream text;
+  write_robot_log(text, log);
+  const RobotLog again = parse_robot_log(text, "carpark.log");
+  EXPECT_EQ(again.controls.size(), log.controls.size());
+  EXPECT_EQ(again.scans.size(), log.scans.size());
+  EXPECT_EQ(again.truth.size(), log.truth.size());
+  EXPECT_EQ(again.landmarks.size(), 15u);
+  const StepSchedule a = make_schedule(log, log.initial->time, 0.0125);
+  const StepSchedule b = make_schedule(again, again.initial->time, 0.0125);
+  EXPECT_EQ(a.observations_used, b.observations_used);
+  for (std::size_t k = 0; k < log.controls.size(); ++k)
+    ASSERT_EQ(again.controls[k].u, log.controls[k].u);
 }
 
 TEST(CarPark, DeadReckoningDetectionsLandOnBeacons) {
