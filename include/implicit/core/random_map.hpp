@@ -7,7 +7,7 @@
 //   log w = (m/2) log 2pi - phi + log J
 //
 // This Jacobian is the corrected one: the paper's eq. (3)/(4) is too small by a factor 2 sqrt(rho)
-// that varies between samples and biases Z-hat (see tests/core/samplers_test.cpp, T2).
+// that varies between samples and biases Z-hat (see tests/core/oracles_test.cpp, T2 and T4).
 // The map is one-to-one only if F - phi increases monotonically along every ray from mu
 // ("star-shaped" targets, e.g. convex F); banana-shaped targets need the linear map.
 // Root finding: bracket [0, hi] (hi doubled from sqrt(rho) until g > 0), then Newton steps
