@@ -108,8 +108,9 @@ struct SyntheticConfig {
 };
 
 /// Synthetic data set (spec §3.6): one uniformly chosen visible landmark per laser step,
-/// z = h(x_true, m) + v (dropped in the rare case that the noisy range is <= 0). Randomness: Rng({seed, n, 0, kData}) for the sensor at step n and
-/// Rng({seed, n, 1, kData}) for the consistent-mode process noise.
+/// z = h(x_true, m) + v (dropped in the rare case that the noisy range is <= 0). Randomness:
+/// Rng({seed, n, 0, kData}) for the sensor at step n and Rng({seed, n, 1, kData}) for the
+/// consistent-mode process noise.
 SlamDataset generate_synthetic(const SlamScenario& scenario, const SyntheticConfig& config,
                                std::uint64_t seed);
 
