@@ -159,7 +159,7 @@ HimmelblauEstimate himmelblau_control(const HimmelblauProblem& pb, const Vec<2>&
   est.log_det_L = at_x.log_det_L;
   est.status = at_x.status;
   est.laplace_u = (at_x.end - x) / (n * pb.dt);
-  const double h = 1e-4 * std::max(1.0, x.cwiseAbs().maxCoeff());
+  const double h = 1e-4 * std::max(1.0, x.norm());
   for (int i = 0; i < 2; ++i) {
     Vec<2> xp = x, xm = x;
     xp(i) += h;
@@ -189,13 +189,74 @@ HimmelblauRun simulate_himmelblau_run(const HimmelblauProblem& pb, int M, std::u
     r.ess_mean += est.ess / K;
     r.failed_minimizations += est.status == MinimizeStatus::kConverged ? 0 : 1;
     r.u.push_back(est.u);
+    r.max_laplace_gap = std::max(r.max_laplace_gap, (est.u - est.laplace_u).cwiseAbs().maxCoeff());
     r.cost += 0.5 * pb.control_cost * est.u.squaredNorm() * pb.dt;
     const Vec<2> w = noise.normal_vector<2>();
     r.x.push_back(r.x.back() + est.u * pb.dt + sd * w);
+    r.last_noise = w;
   }
   r.final_f = himmelblau(r.x.back());
   r.cost += r.final_f;
   return r;
+}
+
+namespace {
+// E g(m + sqrt(v) W), W ~ N(0, I2), by the 5-point Gauss-Hermite rule (probabilists' weight):
+// exact for polynomials of degree <= 9 in each coordinate, so for f (degree 4) and f^2 (degree 8).
+template <typename Fn>
+double gaussian_expectation(const Vec<2>& m, double v, Fn&& g) {
+  const double a = std::sqrt(5.0 - std::sqrt(10.0)), b = std::sqrt(5.0 + std::sqrt(10.0));
+  const double nodes[5] = {-b, -a, 0.0, a, b};
+  const double weights[5] = {
+      (7.0 - 2.0 * std::sqrt(10.0)) / 60.0, (7.0 + 2.0 * std::sqrt(10.0)) / 60.0, 8.0 / 15.0,
+      (7.0 + 2.0 * std::sqrt(10.0)) / 60.0, (7.0 - 2.0 * std::sqrt(10.0)) / 60.0};
+  const double s = std::sqrt(v);
+  double e = 0.0;
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j)
+      e += weights[i] * weights[j] * g(Vec<2>(m(0) + s * nodes[i], m(1) + s * nodes[j]));
+  return e;
+}
+}  // namespace
+
+HimmelblauBridgeReference himmelblau_bridge_reference(const HimmelblauProblem& pb) {
+  pb.validate();
+  const int K = pb.num_steps();
+  HimmelblauBridgeReference ref;
+  // The runs are steered towards z*(x0) from the first step on; x* is the minimum of f there.
+  const Vec<2> start = himmelblau_laplace(pb, pb.x0, 0, pb.x0).end;
+  auto f = make_analytic_target<2>(
+      [](const Vec<2>& x, Vec<2>* g, Mat<2>* h) { return himmelblau(x, g, h); });
+  ref.minimizer = minimize(f, start).x;
+  const Vec<2> e0 = pb.x0 - ref.minimizer;
+  const double s2 = pb.sigma * pb.dt;  // variance of one noise increment per coordinate
+  // E|u_k dt|^2 = |e0|^2/K^2 + 2 s2 sum_{j<k} 1/n_{j+1}^2, with n_{j+1} = K - j - 1.
+  double accumulated = 0.0;  // sum_{j<k} 1/n_{j+1}^2
+  for (int k = 0; k < K; ++k) {
+    ref.control_cost +=
+        0.5 * pb.control_cost / pb.dt * (e0.squaredNorm() / (K * K) + 2.0 * s2 * accumulated);
+    const double n_next = K - k - 1;
+    if (n_next > 0) accumulated += 1.0 / (n_next * n_next);
+  }
+  auto f_only = [](const Vec<2>& x) { return himmelblau(x); };
+  auto f_squared = [](const Vec<2>& x) { return std::pow(himmelblau(x), 2); };
+  ref.final_f = gaussian_expectation(ref.minimizer, s2, f_only);
+  ref.final_f_sd = std::sqrt(std::max(
+      0.0, gaussian_expectation(ref.minimizer, s2, f_squared) - ref.final_f * ref.final_f));
+  // x_{K-1} = x* + e0/K + sqrt(s2) sum_{j<K-1} W_j / n_{j+1}: variance s2 sum_{i=1}^{K-1} 1/i^2.
+  const Vec<2> m = ref.minimizer + e0 / K;
+  const double v = s2 * accumulated;
+  ref.f_before_last_step = gaussian_expectation(m, v, f_only);
+  ref.f_before_last_step_sd =
+      std::sqrt(std::max(0.0, gaussian_expectation(m, v, f_squared) -
+                                  ref.f_before_last_step * ref.f_before_last_step));
+  return ref;
+}
+
+double last_step_adjusted_cost(const HimmelblauProblem& pb, const HimmelblauRun& run,
+                               const HimmelblauBridgeReference& ref) {
+  const Vec<2> end = ref.minimizer + std::sqrt(pb.sigma * pb.dt) * run.last_noise;
+  return run.cost - himmelblau(end) + ref.final_f;
 }
 
 }  // namespace implicit::control

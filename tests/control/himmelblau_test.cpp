@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 
@@ -133,27 +135,103 @@ TEST(Himmelblau, FirstStepOracles) {
   EXPECT_GT(est.ess, 45.0);
 }
 
-TEST(Himmelblau, RunsEndInTheGlobalBasin) {
-  // Spec §2.6: every run ends at (-3.7793, -3.2832), the mean cost is 0.998 with a per-run sd
-  // of about 1.07 (the last, uncontrollable noise step); tolerance 4.5 SE of our mean.
-  HimmelblauProblem pb;
-  const int runs = 12;
-  std::vector<double> cost(runs);
+TEST(Himmelblau, BridgeReferenceMatchesIndependentComputation) {
+  // Expected outcome of spec §2.6 in closed form (header of himmelblau_bridge_reference). The
+  // numbers were computed independently (NumPy, 10-point Gauss-Hermite quadrature, the recursion
+  // v_{k+1} = v_k ((n-1)/n)^2 + sigma dt for the variance, x* refined by Newton):
+  //   E C = 1.0255142207, control part 0.0024143709, E f(x_20) = 1.0230998498 (= 1.0224998498,
+  //   the spec's sigma dt tr(grad^2 f(x*))/2, plus 6 (sigma dt)^2 from the quartic terms),
+  //   sd f(x_20) = 1.0738302748, E f(x_19) = 2.8377482518, sd f(x_19) = 2.7366168051.
+  // The spec's 400-run figures 0.998 +- 0.053 and 2.70 +- 0.12 are Monte Carlo estimates of these
+  // values, 0.5 and 1.0 standard errors low (the SE of mean f(x_19) over 400 runs is
+  // 2.737/20 = 0.137, slightly more than the spec's 0.12).
+  const HimmelblauProblem pb;
+  const auto ref = himmelblau_bridge_reference(pb);
+  EXPECT_NEAR(ref.minimizer(0), -3.779310253, 1e-9);
+  EXPECT_NEAR(ref.minimizer(1), -3.283185991, 1e-9);
+  EXPECT_NEAR(ref.cost(), 1.0255142207, 1e-9);
+  EXPECT_NEAR(ref.control_cost, 0.0024143709, 1e-9);
+  EXPECT_NEAR(ref.final_f, 1.0230998498, 1e-9);
+  EXPECT_NEAR(ref.final_f_sd, 1.0738302748, 1e-9);
+  EXPECT_NEAR(ref.f_before_last_step, 2.8377482518, 1e-9);
+  EXPECT_NEAR(ref.f_before_last_step_sd, 2.7366168051, 1e-9);
+}
+
+namespace {
+struct RunStatistics {
+  double mean = 0.0, se = 0.0;
+};
+RunStatistics statistics(const std::vector<double>& v) {
+  const double n = static_cast<double>(v.size());
+  RunStatistics s;
+  for (double x : v) s.mean += x / n;
+  double q = 0.0;
+  for (double x : v) q += (x - s.mean) * (x - s.mean);
+  s.se = std::sqrt(q / (n - 1.0) / n);
+  return s;
+}
+}  // namespace
+
+TEST(Himmelblau, ClosedLoopIsTheLaplaceBridge) {
+  // With gamma = 1e-4 the weights are uniform and u_hat = sigma grad log psi_hat equals the
+  // Laplace control (z* - x_k)/(n dt) up to the posterior-mean shift of the end point,
+  // E[z] - z* ~ gamma |grad^3 f| / (2 lambda_min^2) = 1e-4 * 91 / (2 * 70.7^2) = 9e-7 (largest at
+  // n = 1), plus the FD error O(h^2) ~ 1e-8: tolerance 2e-6. A wrong factor in u (gamma instead of
+  // sigma, a missing R^-1) or a missing CRN would be off by orders of magnitude. The state then
+  // follows the discrete Brownian bridge to x* of himmelblau_bridge_reference:
+  //   x_k - x* = e0 n/K + sqrt(sigma dt) sum_{j<k} W_j n/n_{j+1},
+  // up to z* - x* ~ R |x_k - x*| / lambda_min ~ 2e-5 per step: tolerance 1e-4.
+  const HimmelblauProblem pb;
+  const auto ref = himmelblau_bridge_reference(pb);
+  const int K = pb.num_steps();
+  const double sd = std::sqrt(pb.sigma * pb.dt);
+  for (std::uint64_t run = 0; run < 3; ++run) {
+    const auto r = simulate_himmelblau_run(pb, 50, 5, run);
+    Vec<2> warm = pb.x0, bridge_noise = Vec<2>::Zero();  // sum_{j<k} W_j / n_{j+1}
+    for (int k = 0; k < K; ++k) {
+      const int n = K - k;
+      const auto lp = himmelblau_laplace(pb, r.x[k], k, warm);
+      warm = lp.end;
+      const Vec<2> laplace_u = (lp.end - r.x[k]) / (n * pb.dt);
+      EXPECT_LT((r.u[k] - laplace_u).cwiseAbs().maxCoeff(), 2e-6) << "run " << run << " k " << k;
+      const Vec<2> bridge = ref.minimizer + (pb.x0 - ref.minimizer) * n / K + sd * n * bridge_noise;
+      EXPECT_LT((r.x[k] - bridge).cwiseAbs().maxCoeff(), 1e-4) << "run " << run << " k " << k;
+      const Vec<2> w = (r.x[k + 1] - r.x[k] - r.u[k] * pb.dt) / sd;  // the step's noise W_k
+      if (n > 1) bridge_noise += w / (n - 1);
+    }
+    EXPECT_LT((r.last_noise - (r.x[K] - r.x[K - 1] - r.u[K - 1] * pb.dt) / sd).norm(), 1e-9);
+  }
+}
+
+TEST(Himmelblau, MeanCostAgainstClosedForm) {
+  // Spec §2.6: every run ends at (-3.7793, -3.2832). The mean cost, f(x_19) and the cost with the
+  // last noise step replaced by its expectation (control variate) are compared with the closed
+  // form of himmelblau_bridge_reference, each within 4.5 standard errors estimated from the runs.
+  // The adjusted cost isolates the control part (0.0024, sd ~1e-3 per run): a missing 1/2 or dt
+  // in the control cost, or controls that are not the optimal ones, fail it, although they are
+  // invisible in the raw cost (sd 1.07 per run). Its bias, sigma dt |grad^3 f| |z* - x*| ~ 1e-5,
+  // is added to the tolerance.
+  const HimmelblauProblem pb;
+  const auto ref = himmelblau_bridge_reference(pb);
+  const int runs = 40;
+  std::vector<double> cost(runs), adjusted(runs), f19(runs);
   implicit::parallel_for(
       runs,
       [&](std::size_t r) {
         const auto run = simulate_himmelblau_run(pb, 50, 17, r);
         cost[r] = run.cost;
+        adjusted[r] = last_step_adjusted_cost(pb, run, ref);
+        f19[r] = himmelblau(run.x[static_cast<std::size_t>(pb.num_steps() - 1)]);
         EXPECT_LT(run.final_f, 10.0);
         EXPECT_LT((run.x.back() - Vec<2>(-3.7793, -3.2832)).norm(), 0.5);
         EXPECT_EQ(run.failed_minimizations, 0);
       },
       1);
-  double m = 0, q = 0;
-  for (double c : cost) m += c / runs;
-  for (double c : cost) q += (c - m) * (c - m);
-  const double se = std::sqrt(q / (runs - 1) / runs);
-  EXPECT_NEAR(m, 0.998, 4.5 * se);
+  const auto c = statistics(cost), a = statistics(adjusted), g = statistics(f19);
+  EXPECT_NEAR(c.mean, ref.cost(), 4.5 * c.se);
+  EXPECT_NEAR(g.mean, ref.f_before_last_step, 4.5 * g.se);
+  EXPECT_LT(a.se, 5e-4);  // the control variate works (raw SE ~0.17 with 40 runs)
+  EXPECT_NEAR(a.mean, ref.cost(), 4.5 * a.se + 1e-5);
 }
 
 TEST(Himmelblau, BadInput) {
