@@ -358,13 +358,13 @@ Synthetic make_synthetic(int steps, std::uint64_t seed, const UteModel& model) {
     const Control u(3.0, 0.12);
     Rng rng({seed, static_cast<std::uint64_t>(n), 0, purpose::kData});
     const Mat3 l1 = model.process_covariance(x, u).llt().matrixL();
-    x = model.predict(x, u) + l1 * Vec<3>(rng.normal(), rng.normal(), rng.normal());
+    x = model.predict(x, u) + l1 * rng.normal_vector<3>();
     std::vector<LabelledMeasurement> z;
     if (n % 8 == 0)
       for (std::size_t k = 0; k < s.map.size(); ++k) {
         const Measurement h = sensor.predict(x, s.map.position(k));
         if (h(0) < 20 && wrap_angle(h(1)) > 0 && wrap_angle(h(1)) < kPi)
-          z.push_back({h + l2 * Vec<2>(rng.normal(), rng.normal()), -1});
+          z.push_back({h + l2 * rng.normal_vector<2>(), -1});
       }
     s.u.push_back(u);
     s.truth.push_back(x);

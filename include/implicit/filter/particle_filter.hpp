@@ -124,7 +124,7 @@ class ParticleFilter {
     const Mat3 l = llt.matrixL();
     parallel_for(particles_.size(), [&](std::size_t j) {
       Rng rng({options_.seed, 0, j, purpose::kInitial});
-      const Vec<3> xi(rng.normal(), rng.normal(), rng.normal());
+      const Vec<3> xi = rng.normal_vector<3>();  // one call: argument order is unspecified
       particles_[j] = mean + l * xi;
     });
     reset_weights();

@@ -141,7 +141,7 @@ struct BootstrapProposal {
       next = previous;
       return -std::numeric_limits<double>::infinity();
     }
-    const Vec<3> xi(rng.normal(), rng.normal(), rng.normal());
+    const Vec<3> xi = rng.normal_vector<3>();  // one call: argument order is unspecified
     next = f + sigma1.matrixL() * xi;
     double log_w = 0.0;
     const double log_norm = -kLog2Pi - 0.5 * ctx.log_det_noise;  // log N(0; 0, Sigma2)
@@ -186,7 +186,7 @@ struct ImplicitProposal {
       next = previous;
       return kNegInf;
     }
-    const Vec<3> xi(rng.normal(), rng.normal(), rng.normal());
+    const Vec<3> xi = rng.normal_vector<3>();  // one call: argument order is unspecified
     if (ctx.z.empty()) {  // F is the Gaussian prior: mu = f, H = Sigma1^-1, all weights equal
       next = f + sigma1.matrixL() * xi;
       return 0.0;
