@@ -14,10 +14,10 @@ namespace implicit::app {
 
 // ---- Path integral control (paper §3) -------------------------------------------------------
 struct SlitSettings {
-  int samples = 50;                 ///< M, samples per psi estimate
-  int runs = 500;                   ///< closed-loop runs (Table 2)
-  std::string mode = "corrected";   ///< "paper" (estimator P) or "corrected" (W2, frozen wall)
-  int naive_mc_small = 5000;        ///< plain Monte Carlo paths (Figure 1)
+  int samples = 50;                ///< M, samples per psi estimate
+  int runs = 500;                  ///< closed-loop runs (Table 2)
+  std::string mode = "corrected";  ///< "paper" (estimator P) or "corrected" (W2, frozen wall)
+  int naive_mc_small = 5000;       ///< plain Monte Carlo paths (Figure 1)
   int naive_mc_large = 100000;
 };
 /// Keys: samples, runs, mode, error_x_mean/std/median, error_u_mean/std/median (in %),
@@ -60,15 +60,15 @@ struct SlamSettings {
   std::string method = "implicit";  ///< ekf | fastslam1 | fastslam2 | implicit | implicit-rb
   int particles = 100;
   int datasets = 50;
-  std::string data_dir;             ///< empty: synthetic Car Park data; else a plain-text log
-  std::string association = "known";  ///< "ml" or "known"
-  std::string truth = "paper";      ///< "paper" (noise-free) or "consistent"
-  int laser_every = 1;              ///< laser update every k-th motion step
+  std::string data_dir;                  ///< empty: synthetic Car Park data; else a plain-text log
+  std::string association = "known";     ///< "ml" or "known"
+  std::string truth = "paper";           ///< "paper" (noise-free) or "consistent"
+  int laser_every = 1;                   ///< laser update every k-th motion step
   double consistent_noise_scale = 0.01;  ///< Sigma1 factor of truth and filters in "consistent"
-  int dense_landmarks = 0;          ///< > 0: a dense field of this many landmarks (scaling)
-  int dense_laps = 1;               ///< route length of the dense field, in Car Park laps
-  double min_range = 0.0;           ///< detections closer than this are ignored [m]
-  double control_noise = 0.5;       ///< P = diag(p, p) of the filters' motion model
+  int dense_landmarks = 0;               ///< > 0: a dense field of this many landmarks (scaling)
+  int dense_laps = 1;                    ///< route length of the dense field, in Car Park laps
+  double min_range = 0.0;                ///< detections closer than this are ignored [m]
+  double control_noise = 0.5;            ///< P = diag(p, p) of the filters' motion model
 };
 /// Keys: method, particles, datasets, error_percent_mean/std, error_aligned_percent_mean,
 /// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_map_m, nees_mean (consistent mode),

@@ -16,8 +16,8 @@
 #include "implicit/implicit.hpp"
 
 namespace py = pybind11;
-using implicit::Vec;
 using implicit::Mat;
+using implicit::Vec;
 using VecX = Vec<Eigen::Dynamic>;
 using MatX = Mat<Eigen::Dynamic>;
 
@@ -33,10 +33,9 @@ py::dict sample(const std::function<double(const VecX&)>& f,
         VecX gn;
         MatX hn;
         const bool need_numeric = (g && !grad) || (h && !hess);
-        const double v =
-            need_numeric ? numeric.evaluate(x, (g && !grad) ? &gn : nullptr,
-                                            (h && !hess) ? &hn : nullptr)
-                         : f(x);
+        const double v = need_numeric ? numeric.evaluate(x, (g && !grad) ? &gn : nullptr,
+                                                         (h && !hess) ? &hn : nullptr)
+                                      : f(x);
         if (g) *g = grad ? (*grad)(x) : gn;
         if (h) *h = hess ? (*hess)(x) : hn;
         return v;
@@ -44,7 +43,8 @@ py::dict sample(const std::function<double(const VecX&)>& f,
       static_cast<int>(x0.size()));
   implicit::SamplerOptions options;
   options.parallel = false;
-  if (map == "random") options.map = implicit::MapKind::kRandom;
+  if (map == "random")
+    options.map = implicit::MapKind::kRandom;
   else if (map != "linear")
     throw implicit::InvalidArgument("map: expected 'linear' or 'random', got '" + map + "'");
   const auto s = implicit::sample(target, x0, samples, {seed}, options);
@@ -65,9 +65,8 @@ py::dict sample(const std::function<double(const VecX&)>& f,
 PYBIND11_MODULE(implicit_py, m) {
   m.doc() = "implicit: implicit sampling core (linear and random maps, weights, resampling)";
   py::register_exception<implicit::InvalidArgument>(m, "InvalidArgument", PyExc_ValueError);
-  m.def("sample", &sample, py::arg("F"), py::arg("grad") = py::none(),
-        py::arg("hess") = py::none(), py::arg("x0"), py::arg("samples") = 1000,
-        py::arg("seed") = 1, py::arg("map") = "linear",
+  m.def("sample", &sample, py::arg("F"), py::arg("grad") = py::none(), py::arg("hess") = py::none(),
+        py::arg("x0"), py::arg("samples") = 1000, py::arg("seed") = 1, py::arg("map") = "linear",
         "Minimise F (a negative log density) from x0 and draw weighted samples.");
   m.def("log_sum_exp", [](const std::vector<double>& a) { return implicit::log_sum_exp(a); });
   m.def("effective_sample_size",

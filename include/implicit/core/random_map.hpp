@@ -32,10 +32,14 @@ enum class RandomMapStatus {
 
 inline std::string_view to_string(RandomMapStatus s) {
   switch (s) {
-    case RandomMapStatus::kOk: return "ok";
-    case RandomMapStatus::kBracketFailed: return "bracket_failed";
-    case RandomMapStatus::kNotConverged: return "not_converged";
-    case RandomMapStatus::kZeroDerivative: return "zero_derivative";
+    case RandomMapStatus::kOk:
+      return "ok";
+    case RandomMapStatus::kBracketFailed:
+      return "bracket_failed";
+    case RandomMapStatus::kNotConverged:
+      return "not_converged";
+    case RandomMapStatus::kZeroDerivative:
+      return "zero_derivative";
   }
   return "unknown";
 }
@@ -88,8 +92,10 @@ RandomMapStatus random_map_sample(const T& f, const Laplace<T::Dim>& lp,
   bool converged = false;
   for (int it = 0; it < options.max_iterations; ++it) {
     const double g = g_of(lambda, &slope);
-    if (g > 0.0) hi = lambda;
-    else lo = lambda;
+    if (g > 0.0)
+      hi = lambda;
+    else
+      lo = lambda;
     double next;
     if (std::isfinite(g) && slope > 0.0) {
       next = lambda - g / slope;
@@ -99,7 +105,8 @@ RandomMapStatus random_map_sample(const T& f, const Laplace<T::Dim>& lp,
     }
     const double change = std::abs(next - lambda);
     lambda = next;
-    if (change <= options.relative_tolerance * lambda || hi - lo <= options.relative_tolerance * hi) {
+    if (change <= options.relative_tolerance * lambda ||
+        hi - lo <= options.relative_tolerance * hi) {
       converged = true;
       break;
     }
