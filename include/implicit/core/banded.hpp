@@ -280,17 +280,9 @@ BandedMinimizeResult<T::Block> minimize_banded(const T& f, const Eigen::VectorXd
       step = -r.gradient;
       slope = -r.gradient.squaredNorm();
     }
-    double t = 1.0;
-    bool accepted = false;
-    for (int b = 0; b < options.max_backtracks; ++b, t *= 0.5) {
-      trial = r.x + t * step;
-      const double ft = f.evaluate(trial, nullptr, nullptr);
-      ++r.evaluations;
-      if (std::isfinite(ft) && ft <= r.value + options.armijo * t * slope) {
-        accepted = true;
-        break;
-      }
-    }
+    const double t =
+        detail::armijo_backtrack(f, r.x, step, r.value, slope, options, trial, r.evaluations);
+    const bool accepted = t > 0.0;
     const double step_size = t * step.cwiseAbs().maxCoeff();
     const double x_scale = 1.0 + r.x.cwiseAbs().maxCoeff();
     if (!accepted) {

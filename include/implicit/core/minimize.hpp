@@ -78,6 +78,24 @@ inline bool all_finite(const Eigen::MatrixBase<Derived>& m) {
 }
 }  // namespace detail
 
+namespace detail {
+/// Armijo backtracking from x along `step` (halving t): writes the accepted point to `trial` and
+/// returns the accepted t, or 0 if no step decreased F. Non-finite trial values count as failures.
+/// Shared by the dense and the banded Newton loops.
+template <typename F, typename V>
+double armijo_backtrack(const F& f, const V& x, const V& step, double value, double slope,
+                        const MinimizeOptions& options, V& trial, int& evaluations) {
+  double t = 1.0;
+  for (int b = 0; b < options.max_backtracks; ++b, t *= 0.5) {
+    trial = x + t * step;
+    const double ft = f.evaluate(trial, nullptr, nullptr);
+    ++evaluations;
+    if (std::isfinite(ft) && ft <= value + options.armijo * t * slope) return t;
+  }
+  return 0.0;
+}
+}  // namespace detail
+
 /// Minimises `f` from x0 by damped Newton. Never throws on algorithm failure; see `status`.
 template <Target T>
 MinimizeResult<T::Dim> minimize(const T& f, const typename T::Vector& x0,
@@ -130,19 +148,9 @@ MinimizeResult<T::Dim> minimize(const T& f, const typename T::Vector& x0,
       step = -r.gradient;
       slope = -r.gradient.squaredNorm();
     }
-    // Armijo backtracking; non-finite trial values are treated as failed steps.
-    double t = 1.0;
-    double ft = std::numeric_limits<double>::infinity();
-    bool accepted = false;
-    for (int b = 0; b < options.max_backtracks; ++b, t *= 0.5) {
-      trial = r.x + t * step;
-      ft = f.evaluate(trial, nullptr, nullptr);
-      ++r.evaluations;
-      if (std::isfinite(ft) && ft <= r.value + options.armijo * t * slope) {
-        accepted = true;
-        break;
-      }
-    }
+    const double t =
+        detail::armijo_backtrack(f, r.x, step, r.value, slope, options, trial, r.evaluations);
+    const bool accepted = t > 0.0;
     const double step_size = (t * step).cwiseAbs().maxCoeff();
     const double x_scale = 1.0 + r.x.cwiseAbs().maxCoeff();
     if (!accepted) {
