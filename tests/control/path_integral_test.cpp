@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include "implicit/control/himmelblau.hpp"
 #include "implicit/control/path_integral.hpp"
@@ -187,4 +189,164 @@ TEST(PathIntegral, ClosedLoopTakesTheNoiseAsInput) {
   EXPECT_NEAR(r.x.back()(0), x, 1e-7);
   EXPECT_THROW(simulate_closed_loop(problem, Vec<1>(1.0), Eigen::MatrixXd::Zero(1, 3), {}, 1),
                implicit::InvalidArgument);
+}
+
+namespace {
+
+// Convex but not quadratic: linear drift, quartic running and final costs. F is convex in the
+// path, so the random map is one-to-one (star-shaped F) and both maps are exact samplers.
+struct QuarticCosts {
+  template <typename T>
+  Eigen::Matrix<T, 1, 1> drift(const Eigen::Matrix<T, 1, 1>& x, double) const {
+    return -0.5 * x;
+  }
+  template <typename T>
+  T running_cost(const Eigen::Matrix<T, 1, 1>& x, double) const {
+    return 0.5 * x(0) * x(0) + 0.25 * x(0) * x(0) * x(0) * x(0);
+  }
+  template <typename T>
+  T final_cost(const Eigen::Matrix<T, 1, 1>& x) const {
+    const T d = x(0) - 1.0;
+    return 0.5 * d * d + 0.5 * d * d * d * d;
+  }
+};
+
+std::vector<HardWall<1>> slit_walls() {
+  return {HardWall<1>{.time = 1.0, .openings = {{-6.0, -4.0}, {6.0, 8.0}}}};
+}
+
+// The double slit's exact log psi (spec §2.4.1) at t = 0, for the cross-check.
+double slit_exact_log_psi(double x) {
+  const double g = 0.1, v = 1.0, c = g + 1.0, tf = 2.0;
+  const double m = x * c / (v + c), tau = std::sqrt(v * c / (v + c));
+  auto cdf = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  const double S =
+      cdf((-4 - m) / tau) - cdf((-6 - m) / tau) + cdf((8 - m) / tau) - cdf((6 - m) / tau);
+  return 0.5 * std::log(g / (g + tf)) - x * x / (2 * (g + tf)) + std::log(S);
+}
+
+}  // namespace
+
+TEST(PathIntegral, RandomMapExactForQuadraticF) {
+  // F quadratic: the random map's root is lambda = sqrt(rho) and its Jacobian 1 for every xi,
+  // so each weight equals psi exactly; both maps give the closed form to rounding.
+  ControlProblem problem(LinearQuadratic{}, scalar_spec(0.5, 2.0, 1.0, 0.05));
+  for (int k : {0, 11, 19}) {
+    const Vec<1> x(0.4);
+    const auto lin = estimate_log_psi_implicit(problem, x, k, 5, {4});
+    const auto rnd = estimate_log_psi_implicit(problem, x, k, 5, {4}, {}, {}, SamplingMap::kRandom);
+    EXPECT_NEAR(rnd.log_psi, lin.log_psi, 1e-9) << "k = " << k;
+    EXPECT_NEAR(rnd.ess, 5.0, 1e-9);
+    EXPECT_EQ(rnd.map_failures, 0);
+    EXPECT_EQ(rnd.wall_hits, 0);
+  }
+  // After the double slit's wall (closed form in ExactForQuadraticFAnyM), through the control.
+  ControlProblem walker(FreeWalker{}, scalar_spec(1.0, 0.1, 1.0, 0.02));
+  const auto c =
+      estimate_control(walker, Vec<1>(0.7), 10, {.samples = 3, .map = SamplingMap::kRandom}, {5});
+  EXPECT_NEAR(c.u(0), -0.7 / (0.1 + 40 * 0.02), 1e-7);
+}
+
+TEST(PathIntegral, RandomAndLinearMapAgreeOnANonQuadraticProblem) {
+  // Tolerances: the two implicit estimates use different seeds (independent), so their difference
+  // has SE sqrt(se_l^2 + se_r^2), with se = relative sd of the weights / sqrt(M) (the delta-method
+  // SE of log psi_hat); plain MC with 2e5 paths is the reference, checked against each within
+  // 4.5 of the combined SE.
+  ControlProblem problem(QuarticCosts{}, scalar_spec(0.5, 1.0, 1.0, 0.05));
+  const Vec<1> x(-0.3);
+  const auto lin = estimate_log_psi_implicit(problem, x, 0, 4000, {21});
+  const auto rnd =
+      estimate_log_psi_implicit(problem, x, 0, 4000, {22}, {}, {}, SamplingMap::kRandom);
+  ASSERT_EQ(rnd.map_failures, 0);
+  ASSERT_GT(lin.relative_se, 0.0);
+  ASSERT_GT(rnd.relative_se, 0.0);
+  // The weights really vary (else the test could not fail for a wrong Jacobian).
+  EXPECT_LT(rnd.ess, 3999.0);
+  EXPECT_NEAR(rnd.log_psi, lin.log_psi, 4.5 * std::hypot(lin.relative_se, rnd.relative_se));
+  const auto mc = estimate_log_psi_monte_carlo(problem, x, 0, 200000, {23});
+  EXPECT_NEAR(lin.log_psi, mc.log_psi, 4.5 * std::hypot(lin.relative_se, mc.relative_se));
+  EXPECT_NEAR(rnd.log_psi, mc.log_psi, 4.5 * std::hypot(rnd.relative_se, mc.relative_se));
+}
+
+TEST(PathIntegral, HardWallMixtureReproducesTheDoubleSlit) {
+  // Spec §2.4.1 / §2.4.3: the discretisation is exact at grid times, so E[psi_hat] = psi_exact.
+  // Tolerance: 4.5 SE of log psi_hat (relative sd of the weights / sqrt(M)).
+  ControlProblem problem(FreeWalker{}, scalar_spec(1.0, 0.1, 2.0, 0.02), slit_walls());
+  EXPECT_NEAR(slit_exact_log_psi(1.0), -24.070635, 1e-6);  // spec §2.4.2 table
+  for (double x : {1.0, 1.9}) {  // left slit dominates; both slits matter (switch at 1.909)
+    const auto e = estimate_log_psi_implicit(problem, Vec<1>(x), 0, 10000, {31});
+    ASSERT_EQ(e.modes.size(), 2u);
+    EXPECT_EQ(e.status, implicit::MinimizeStatus::kConverged);
+    EXPECT_NEAR(e.log_psi, slit_exact_log_psi(x), 4.5 * e.relative_se) << "x = " << x;
+    EXPECT_LT(e.relative_se, 0.05);
+    // Constrained minima on the slit edges nearest to m = 11 x / 21 (spec §2.4.3).
+    EXPECT_EQ(e.modes[0].clamped[0], 1);
+    EXPECT_EQ(e.modes[1].clamped[0], -1);
+    EXPECT_NEAR(e.modes[0].wall_values[0], -4.0, 1e-9);
+    EXPECT_NEAR(e.modes[1].wall_values[0], 6.0, 1e-9);
+    // phi_s of spec §2.4.3 at x = 1: 19.772727 and 28.863636.
+    if (x == 1.0) {
+      EXPECT_NEAR(e.modes[0].phi, 19.7727272727, 1e-8);
+      EXPECT_NEAR(e.modes[1].phi, 28.8636363636, 1e-8);
+    }
+    // About half of each component's samples hit the wall (centred on an edge, spec E32).
+    EXPECT_GT(e.wall_hits, 3000);
+    EXPECT_LT(e.wall_hits, 7000);
+    EXPECT_EQ(e.modes[0].samples + e.modes[1].samples, 10000);
+  }
+  // Between the openings both modes carry weight; plain MC cannot pass the wall there.
+  const auto both = estimate_log_psi_implicit(problem, Vec<1>(1.9), 0, 1000, {32});
+  EXPECT_GT(std::exp(both.modes[0].log_weight), 0.2);
+  EXPECT_GT(std::exp(both.modes[1].log_weight), 0.2);
+  const auto mc = estimate_log_psi_monte_carlo(problem, Vec<1>(1.9), 0, 20000, {33});
+  EXPECT_GT(mc.wall_hits, 19990);
+}
+
+TEST(PathIntegral, HardWallControlMatchesTheDoubleSlit) {
+  // Frozen-wall FD-CRN control at (1, 0), M = 200, R = 40 independent evaluations: the mean
+  // must be within 4.5 sd / sqrt(R) of the exact -5.109548, plus the O(1/M) self-normalisation
+  // bias (spec §2.4.5 measures +0.011 at M = 50 for W2, i.e. 0.003 at M = 200; allow 0.01).
+  ControlProblem problem(FreeWalker{}, scalar_spec(1.0, 0.1, 2.0, 0.02), slit_walls());
+  const int R = 40;
+  double s = 0.0, s2 = 0.0;
+  for (int r = 0; r < R; ++r) {
+    const auto c = estimate_control(problem, Vec<1>(1.0), 0, {.samples = 200, .fd_step = 1e-3},
+                                    {100, static_cast<std::uint64_t>(r)});
+    ASSERT_TRUE(c.defined);
+    s += c.u(0);
+    s2 += c.u(0) * c.u(0);
+  }
+  const double mean = s / R, sd = std::sqrt((s2 - R * mean * mean) / (R - 1));
+  EXPECT_GT(sd, 0.0);
+  EXPECT_NEAR(mean, -5.109548, 4.5 * sd / std::sqrt(R) + 0.01) << "sd " << sd;
+  // At the wall time a state outside the openings has psi = 0; after it the wall is behind.
+  const auto at_wall = estimate_log_psi_implicit(problem, Vec<1>(0.0), 50, 5, {1});
+  EXPECT_EQ(at_wall.log_psi, -std::numeric_limits<double>::infinity());
+  EXPECT_EQ(at_wall.wall_hits, 5);
+  const auto behind = estimate_log_psi_implicit(problem, Vec<1>(0.0), 51, 5, {1});
+  EXPECT_TRUE(std::isfinite(behind.log_psi));
+  EXPECT_TRUE(behind.modes.empty());
+  // The random map is refused with walls ahead (the mixture needs a proposal density).
+  EXPECT_THROW(
+      estimate_log_psi_implicit(problem, Vec<1>(1.0), 0, 5, {1}, {}, {}, SamplingMap::kRandom),
+      implicit::InvalidArgument);
+}
+
+TEST(PathIntegral, HardWallBadInput) {
+  const auto spec = scalar_spec(1.0, 0.1, 2.0, 0.02);
+  auto make = [&](HardWall<1> w) { ControlProblem p(FreeWalker{}, spec, {w}); };
+  EXPECT_THROW(make({.time = 1.01, .openings = {{0, 1}}}), implicit::InvalidArgument);
+  EXPECT_THROW(make({.time = 0.0, .openings = {{0, 1}}}), implicit::InvalidArgument);
+  EXPECT_THROW(make({.time = 2.02, .openings = {{0, 1}}}), implicit::InvalidArgument);
+  EXPECT_THROW(make({.time = 1.0, .openings = {}}), implicit::InvalidArgument);
+  EXPECT_THROW(make({.time = 1.0, .openings = {{1, 0}}}), implicit::InvalidArgument);
+  EXPECT_THROW(make({.time = 1.0, .openings = {{0, 2}, {1, 3}}}), implicit::InvalidArgument);
+  EXPECT_THROW(make({.time = 1.0, .direction = Vec<1>(0.0), .openings = {{0, 1}}}),
+               implicit::InvalidArgument);
+  try {
+    make({.time = 1.0, .openings = {{0, 2}, {1, 3}}});
+  } catch (const implicit::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("opening 1"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(make({.time = 2.0, .openings = {{-1, 1}}}));
 }
