@@ -160,6 +160,76 @@ TEST(MclOracle, HessianMatchesAutodiff) {
   }
 }
 
+TEST(MclOracle, FastPathMatchesGenericPath) {
+  // The written-out range-bearing evaluation against the sensor-interface one, with a
+  // non-diagonal noise information (exercises n01). Tolerance 1e-12 relative: the two differ
+  // only in the order of floating-point operations on O(1e4) terms.
+  const RangeBearingSensor sensor;
+  const UteModel model;
+  const Control u = oracle_control();
+  Mat2 ninfo;
+  ninfo << 20.0, 3.0, 3.0, 1100.0;
+  MclObjective<RangeBearingSensor> f;
+  f.reset(sensor, ninfo, model.predict(kPrevious, u),
+          model.process_covariance(kPrevious, u).llt().solve(Mat3::Identity()), 1.25);
+  f.add(Landmark(20, 12), Measurement(12.3, 1.85));
+  f.add(Landmark(11, 17), Measurement(12.1, 2.74));
+  f.add(Landmark(3, -4), Measurement(9.0, -0.9));
+  for (const Vec<3>& dx : {Vec<3>(0, 0, 0), Vec<3>(0.3, -0.2, 0.05), Vec<3>(-1.0, 0.5, 3.0)}) {
+    const Pose x = f.prediction() + dx;
+    Vec<3> g0, g1;
+    Mat3 h0, h1, gn0, gn1;
+    const double v0 = f.evaluate(x, &g0, &h0, &gn0);
+    const double v1 = f.evaluate_generic(x, &g1, &h1, &gn1);
+    EXPECT_NEAR(v0, v1, 1e-12 * std::max(1.0, std::abs(v1)));
+    EXPECT_NEAR(f.evaluate(x), v1, 1e-12 * std::max(1.0, std::abs(v1)));
+    const double scale = std::max(1.0, h1.cwiseAbs().maxCoeff());
+    expect_rel(g0, g1, 1e-12 * scale, "gradient");
+    EXPECT_LE((h0 - h1).cwiseAbs().maxCoeff(), 1e-12 * scale) << "hessian";
+    EXPECT_LE((gn0 - gn1).cwiseAbs().maxCoeff(), 1e-12 * scale) << "gauss-newton";
+  }
+}
+
+TEST(MclOracle, FusedModelAndSensorCallsMatchSeparateOnes) {
+  const UteModel model;
+  const RangeBearingSensor sensor;
+  const Control u = oracle_control();
+  for (const Pose& x : {kPrevious, Pose(-3.0, 40.0, -2.5), Pose(100.0, -7.0, 9.0)}) {
+    Pose f;
+    Mat3 s;
+    model.predict_with_covariance(x, u, f, s);
+    expect_rel(f, model.predict(x, u), 1e-14, "mean");
+    expect_rel(s.reshaped(), model.process_covariance(x, u).reshaped(), 1e-14, "covariance");
+    const Landmark m(20, 12);
+    Measurement h;
+    robot::Mat23 j;
+    sensor.predict_with_jacobian(x, m, h, j);
+    expect_rel(h, sensor.predict(x, m), 1e-14, "prediction");
+    expect_rel(j.reshaped(), sensor.jacobian_pose(x, m).reshaped(), 1e-14, "jacobian");
+  }
+}
+
+TEST(Cholesky3, MatchesEigenAndRejectsNonSpd) {
+  Mat3 a;
+  a << 4.0, 1.0, 0.5, 1.0, 3.0, -0.2, 0.5, -0.2, 2.0;
+  Cholesky3 c;
+  ASSERT_TRUE(c.compute(a));
+  const Eigen::LLT<Mat3> ref(a);
+  EXPECT_LE((c.matrixL() - Mat3(ref.matrixL())).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_NEAR(c.log_det_L(), 0.5 * std::log(a.determinant()), 1e-14);
+  const Vec<3> b(1.0, -2.0, 0.5);
+  expect_rel(c.solve(b), ref.solve(b), 1e-14, "solve");
+  EXPECT_LE((c.inverse() * a - Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-14);
+  expect_rel(c.solve_upper(b), Vec<3>(ref.matrixU().solve(b)), 1e-14, "upper solve");
+  Mat3 indefinite = a;
+  indefinite(2, 2) = -1.0;
+  EXPECT_FALSE(c.compute(indefinite));
+  Mat3 nan = a;
+  nan(1, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(c.compute(nan));
+  EXPECT_FALSE(c.compute(Mat3::Zero()));
+}
+
 TEST(MclOracle, PeriodicInHeading) {
   // Shifting the previous heading and the state heading by 2 pi leaves F unchanged (residuals
   // are wrapped, the state heading is not). Tolerance 1e-12 relative: round-off of sin/cos at

@@ -75,18 +75,18 @@ struct ProposalContext {
 
 namespace detail {
 
-/// Prediction f, Cholesky of Sigma1; false if Sigma1 is not SPD or f not finite.
+/// Prediction f, Cholesky of Sigma1 (and Sigma1 itself); false if Sigma1 is not SPD or f not
+/// finite.
 template <typename Motion>
-bool predict(const Motion& motion, const Pose& previous, const Control& u, Pose& f,
-             Eigen::LLT<Mat3>& sigma1) {
-  f = motion.predict(previous, u);
-  sigma1.compute(motion.process_covariance(previous, u));
-  return f.allFinite() && sigma1.info() == Eigen::Success;
-}
-
-inline double log_det_from_llt(const Eigen::LLT<Mat3>& llt) {
-  const Mat3& l = llt.matrixLLT();
-  return 2.0 * (std::log(l(0, 0)) + std::log(l(1, 1)) + std::log(l(2, 2)));
+bool predict(const Motion& motion, const Pose& previous, const Control& u, Pose& f, Mat3& sigma1,
+             Cholesky3& sigma1_factor) {
+  if constexpr (robot::MotionModelWithCovariance<Motion>) {
+    motion.predict_with_covariance(previous, u, f, sigma1);
+  } else {
+    f = motion.predict(previous, u);
+    sigma1 = motion.process_covariance(previous, u);
+  }
+  return f.allFinite() && sigma1.allFinite() && sigma1_factor.compute(sigma1);
 }
 
 /// Maximum-likelihood association of z at pose x with innovation covariance
@@ -111,11 +111,21 @@ int associate(const Ctx& ctx, const Pose& x, const Mat3* pose_cov, const Measure
                  const double lo = std::max(0.0, z(0) - range_tol), hi = z(0) + range_tol;
                  if (d2 < lo * lo || d2 > hi * hi) return false;
                }
-               e = ctx.sensor->residual(ctx.sensor->predict(x, m), z);
                if (pose_cov) {
-                 const Mat23 h = ctx.sensor->jacobian_pose(x, m);
-                 s = h * (*pose_cov) * h.transpose() + noise;
+                 Measurement predicted;
+                 Mat23 h;
+                 if constexpr (robot::LandmarkSensorWithFusedJacobian<typename Ctx::SensorType>) {
+                   ctx.sensor->predict_with_jacobian(x, m, predicted, h);
+                 } else {
+                   predicted = ctx.sensor->predict(x, m);
+                   h = ctx.sensor->jacobian_pose(x, m);
+                 }
+                 e = ctx.sensor->residual(predicted, z);
+                 const Eigen::Matrix<double, 2, 3> hp = h * (*pose_cov);
+                 s.noalias() = hp * h.transpose();
+                 s += noise;
                } else {
+                 e = ctx.sensor->residual(ctx.sensor->predict(x, m), z);
                  s = noise;
                }
                return true;
@@ -135,8 +145,9 @@ struct BootstrapProposal {
   double propose(const ProposalContext<Motion, Sensor>& ctx, const Pose& previous, Rng& rng,
                  Pose& next, ParticleStats& st) const {
     Pose f;
-    Eigen::LLT<Mat3> sigma1;
-    if (!detail::predict(*ctx.motion, previous, ctx.u, f, sigma1)) {
+    Mat3 sigma1_full;
+    Cholesky3 sigma1;
+    if (!detail::predict(*ctx.motion, previous, ctx.u, f, sigma1_full, sigma1)) {
       st.failed = true;
       next = previous;
       return -std::numeric_limits<double>::infinity();
@@ -180,8 +191,9 @@ struct ImplicitProposal {
                  Pose& next, ParticleStats& st) const {
     constexpr double kNegInf = -std::numeric_limits<double>::infinity();
     Pose f;
-    Eigen::LLT<Mat3> sigma1;
-    if (!detail::predict(*ctx.motion, previous, ctx.u, f, sigma1)) {
+    Mat3 sigma1_full;
+    Cholesky3 sigma1;
+    if (!detail::predict(*ctx.motion, previous, ctx.u, f, sigma1_full, sigma1)) {
       st.failed = true;
       next = previous;
       return kNegInf;
@@ -191,10 +203,9 @@ struct ImplicitProposal {
       next = f + sigma1.matrixL() * xi;
       return 0.0;
     }
-    // Sigma1^-1 is needed as a matrix (it is the prior's Hessian); a Cholesky solve gives it.
-    const Mat3 prior_information = sigma1.solve(Mat3::Identity());
-    const Mat3 sigma1_full = sigma1.reconstructedMatrix();
-    const double constant = 0.5 * (3.0 * kLog2Pi + detail::log_det_from_llt(sigma1));
+    // Sigma1^-1 is needed as a matrix (it is the prior's Hessian); Cholesky solves give it.
+    const Mat3 prior_information = sigma1.inverse();
+    const double constant = 1.5 * kLog2Pi + sigma1.log_det_L();  // 1/2 log det(2 pi Sigma1)
     MclObjective<Sensor> obj;
     obj.reset(*ctx.sensor, ctx.noise_information, f, prior_information, constant);
     const double per_term = kLog2Pi + 0.5 * ctx.log_det_noise;  // 1/2 log det(2 pi Sigma2)
@@ -225,7 +236,7 @@ struct ImplicitProposal {
       return lw + 0.5 * xi.squaredNorm();
     }
     if (map == ImplicitMap::kLinear) {
-      next = nr.mu + nr.L.transpose().triangularView<Eigen::Upper>().solve(xi);
+      next = nr.mu + upper_solve(nr.L, xi);
       const double fx = obj.evaluate(next);
       if (!std::isfinite(fx)) {
         st.failed = true;
@@ -237,13 +248,21 @@ struct ImplicitProposal {
   }
 
  private:
+  /// L^-T v for a lower-triangular 3x3 L, written out (Eigen's triangular solve is out of line).
+  static Vec<3> upper_solve(const Mat3& l, const Vec<3>& v) {
+    const double x2 = v(2) / l(2, 2);
+    const double x1 = (v(1) - l(2, 1) * x2) / l(1, 1);
+    const double x0 = (v(0) - l(1, 0) * x1 - l(2, 0) * x2) / l(0, 0);
+    return Vec<3>(x0, x1, x2);
+  }
+
   /// Random map (spec §1.3): X = mu + lambda L^-T eta, F(X) - phi = rho / 2.
   template <typename Objective>
   static double random_map(const Objective& obj, const NewtonResult& nr, const Vec<3>& xi,
                            Pose& next, ParticleStats& st) {
     constexpr double kNegInf = -std::numeric_limits<double>::infinity();
     const double rho = xi.squaredNorm();
-    const Vec<3> d = nr.L.transpose().triangularView<Eigen::Upper>().solve(xi / std::sqrt(rho));
+    const Vec<3> d = upper_solve(nr.L, xi / std::sqrt(rho));
     auto g = [&](double lambda) { return obj.evaluate(nr.mu + lambda * d) - nr.phi - 0.5 * rho; };
     double lo = 0.0, hi = std::sqrt(rho);
     int k = 0;

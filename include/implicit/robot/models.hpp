@@ -64,7 +64,24 @@ concept RangeFirstSensor = LandmarkSensor<S> &&
   { s.range(x, m) } -> std::convertible_to<double>;
 };
 
+/// A motion model that computes the mean and the covariance in one call (sharing work between
+/// them); the proposals use it when present, predict() + process_covariance() otherwise.
+template <typename M>
+concept MotionModelWithCovariance = MotionModel<M> &&
+    requires(const M& m, const Pose& x, const Control& u, Pose& f, Mat3& s) {
+  m.predict_with_covariance(x, u, f, s);
+};
+
+/// A landmark sensor that computes predict() and jacobian_pose() in one call.
+template <typename S>
+concept LandmarkSensorWithFusedJacobian = LandmarkSensor<S> &&
+    requires(const S& s, const Pose& x, const Landmark& m, Measurement& h, Mat23& j) {
+  s.predict_with_jacobian(x, m, h, j);
+};
+
 static_assert(MotionModel<UteModel>);
+static_assert(MotionModelWithCovariance<UteModel>);
+static_assert(LandmarkSensorWithFusedJacobian<RangeBearingSensor>);
 static_assert(RangeFirstSensor<RangeBearingSensor>);
 static_assert(LandmarkSensorWithHessian<RangeBearingSensor>);
 

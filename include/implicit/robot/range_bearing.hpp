@@ -76,6 +76,16 @@ class RangeBearingSensor {
     return j;
   }
 
+  /// predict() and jacobian_pose() in one pass (one square root, one atan2 instead of a hypot, an
+  /// atan2 and a square root): the per-particle filter updates call this in their inner loops.
+  void predict_with_jacobian(const Pose& x, const Landmark& m, Measurement& h, Mat23& j) const {
+    const double dx = x(0) - m(0), dy = x(1) - m(1);
+    const double r2 = dx * dx + dy * dy, r = std::sqrt(r2);
+    h(0) = r;
+    h(1) = std::atan2(-dy, -dx) - x(2) + kPi / 2.0;
+    j << dx / r, dy / r, 0.0, -dy / r2, dx / r2, -1.0;
+  }
+
   /// Second derivatives of h with respect to the pose (spec §3.3), with dx = x - m1, dy = y - m2:
   ///   d2r (x,y block) = [[dy^2, -dx dy], [-dx dy, dx^2]] / r^3
   ///   d2b (x,y block) = [[2 dx dy, dy^2 - dx^2], [dy^2 - dx^2, -2 dx dy]] / r^4

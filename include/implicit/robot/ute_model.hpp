@@ -102,6 +102,26 @@ class UteModel {
     return p_.dt * s;
   }
 
+  /// predict() and process_covariance() together, sharing the trigonometry (one sincos of the
+  /// heading, one tan and one cos of the steering instead of four and three): the filters call
+  /// both for every particle at every step.
+  void predict_with_covariance(const Pose& x, const Control& u, Pose& mean,
+                               Mat3& covariance) const {
+    const double ta = std::tan(u(1)), ca = std::cos(u(1));
+    const double t = ta / p_.wheelbase;
+    const double s = std::sin(x(2)), c = std::cos(x(2));
+    const double a = p_.laser_forward, b = p_.laser_left;
+    const Vec<3> g(c - t * (a * s + b * c), s + t * (a * c - b * s), t);  // direction()
+    mean = x + (p_.dt * u(0)) * g;
+    const double cfac = u(0) / (ca * ca * p_.wheelbase);
+    const Vec<3> k(-cfac * (a * s + b * c), cfac * (a * c - b * s), cfac);  // dR/d alpha
+    const double p1 = p_.control_std(0), p2 = p_.control_std(1);
+    const Vec<3> g1 = p1 * g, k2 = p2 * k;
+    covariance = g1 * g1.transpose() + k2 * k2.transpose();
+    covariance.diagonal() += p_.state_std.cwiseAbs2();
+    covariance *= p_.dt;
+  }
+
  private:
   Pose direction(double beta, double alpha) const {
     const double t = std::tan(alpha) / p_.wheelbase;
