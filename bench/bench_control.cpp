@@ -1,7 +1,10 @@
 // Timing of path integral control: one control evaluation for the double slit (M = 50), the
 // robot arm (n = 200) and Himmelblau (M = 50), and the whole of Table 2 (4 x 500 closed-loop
-// runs, parallel over runs). Figures are recorded in docs/performance.md.
+// runs, parallel over runs); the generic estimator with the random map and with a hard wall
+// (mixture over the openings). Figures are recorded in docs/performance.md.
 #include <benchmark/benchmark.h>
+
+#include <vector>
 
 #include "implicit/control/double_slit.hpp"
 #include "implicit/control/himmelblau.hpp"
@@ -80,6 +83,71 @@ void BM_GenericHimmelblauControl(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_GenericHimmelblauControl)->Unit(benchmark::kMicrosecond);
+
+// The generic estimator with the random map (one scalar root per sample, O(n) jet evaluations
+// per root iteration) against the linear map, on the same Himmelblau path.
+void BM_GenericHimmelblauRandomMap(benchmark::State& state) {
+  ControlSpec<2, 2> s;
+  s.G.setIdentity();
+  s.noise_covariance = 0.01 * implicit::Mat<2>::Identity();
+  s.control_cost = 0.01 * implicit::Mat<2>::Identity();
+  s.horizon = 20.0;
+  s.dt = 1.0;
+  const ControlProblem problem(Himmelblau2{}, s);
+  std::uint64_t i = 0;
+  for (auto _ : state) {
+    const auto c = estimate_control(problem, implicit::Vec<2>(-1, -4), 0,
+                                    {.samples = 50, .map = SamplingMap::kRandom}, {1, i++, 0, 0});
+    benchmark::DoNotOptimize(c.u);
+  }
+}
+BENCHMARK(BM_GenericHimmelblauRandomMap)->Unit(benchmark::kMicrosecond);
+
+struct FreeWalker {
+  template <typename T>
+  Eigen::Matrix<T, 1, 1> drift(const Eigen::Matrix<T, 1, 1>& x, double) const {
+    return x * 0.0;
+  }
+  template <typename T>
+  T running_cost(const Eigen::Matrix<T, 1, 1>& x, double) const {
+    return x(0) * 0.0;
+  }
+  template <typename T>
+  T final_cost(const Eigen::Matrix<T, 1, 1>& x) const {
+    return 0.5 * x(0) * x(0);
+  }
+};
+
+// The double slit through the generic problem with a HardWall: two constrained minima (range-
+// space Newton on the 100-D path), a two-component mixture, M samples, frozen-wall FD-CRN.
+// Argument 0: random map without the wall (the after-the-wall problem at the same size).
+void BM_GenericSlitControl(benchmark::State& state, bool wall, SamplingMap map) {
+  ControlSpec<1, 1> s;
+  s.G << 1.0;
+  s.noise_covariance << 1.0;
+  s.control_cost << 0.1;
+  s.horizon = 2.0;
+  s.dt = 0.02;
+  std::vector<HardWall<1>> walls;
+  if (wall) walls.push_back({.time = 1.0, .openings = {{-6.0, -4.0}, {6.0, 8.0}}});
+  const ControlProblem problem(FreeWalker{}, s, walls);
+  const int M = static_cast<int>(state.range(0));
+  std::uint64_t i = 0;
+  for (auto _ : state) {
+    const auto c = estimate_control(problem, implicit::Vec<1>(1.0), 0,
+                                    {.samples = M, .map = map, .fd_step = 1e-3}, {1, i++, 0, 0});
+    benchmark::DoNotOptimize(c.u);
+  }
+}
+BENCHMARK_CAPTURE(BM_GenericSlitControl, mixture_linear, true, SamplingMap::kLinear)
+    ->Arg(50)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_GenericSlitControl, no_wall_linear, false, SamplingMap::kLinear)
+    ->Arg(50)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_GenericSlitControl, no_wall_random, false, SamplingMap::kRandom)
+    ->Arg(50)
+    ->Unit(benchmark::kMicrosecond);
 
 void BM_SlitTable2(benchmark::State& state, SlitEstimator estimator) {
   const DoubleSlit slit;
