@@ -46,6 +46,20 @@ void setup_mcl(CLI::App& sub) {
                  "Reading of Table 7's Sigma2 entries: variance (spec E27) or std")
       ->check(CLI::IsMember({"variance", "std"}))
       ->capture_default_str();
+  sub.add_option(
+         "--truth", cmd->settings.truth,
+         "Ground truth: gps (fixes interpolated in time) or reference (a GPS-aided implicit "
+         "MCL run with many particles, cached; docs/cli.md)")
+      ->check(CLI::IsMember({"gps", "reference"}))
+      ->capture_default_str();
+  sub.add_option("--gps-std", cmd->settings.gps_std,
+                 "GPS std [m] per coordinate assumed by the reference run")
+      ->check(CLI::Range(1e-3, 100.0))
+      ->capture_default_str();
+  sub.add_option("--reference-particles", cmd->settings.reference_particles,
+                 "Particles of the reference run")
+      ->check(CLI::Range(1, 10000000))
+      ->capture_default_str();
   sub.add_flag("--no-clutter{false}", cmd->settings.clutter,
                "Dropped detections contribute nothing (instead of the clutter density p0)");
   add_common_options(sub, cmd->ctx);

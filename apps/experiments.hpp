@@ -49,6 +49,9 @@ struct MclSettings {
   std::string map = "linear";       ///< implicit proposal: "linear" or "random" map
   bool clutter = true;              ///< dropped detections contribute the clutter density p0
   std::string sigma2 = "variance";  ///< reading of Table 7's Sigma2: "variance" or "std"
+  std::string truth = "gps";        ///< ground truth: "gps" or "reference" (GPS-aided MCL run)
+  double gps_std = 0.5;             ///< [m] GPS std assumed by the reference run
+  int reference_particles = 5000;   ///< particles of the reference run
 };
 /// Keys: method, particles, runs, config, error_percent_mean/std/median, rmse_m,
 /// heading_rmse_rad, ess_mean, cpu_ms_per_step, detections_used, detections_dropped, lost_runs,

@@ -1,6 +1,8 @@
 #include "implicit/filter/localization.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/weights.hpp"
@@ -29,6 +31,25 @@ LocalizationProblem make_problem(const robot::RobotLog& log, double dt) {
     }
   }
   p.truth = robot::interpolate_truth(log, p.schedule);
+  // Each truth record goes to the step nearest in time (steps are sorted), if within dt / 2.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  p.position_fixes.assign(p.schedule.steps.size(), Vec<2>(nan, nan));
+  for (const robot::TruthRecord& t : log.truth) {
+    const auto it =
+        std::lower_bound(p.schedule.steps.begin(), p.schedule.steps.end(), t.time,
+                         [](const robot::FilterStep& s, double time) { return s.time < time; });
+    std::size_t best = p.schedule.steps.size();
+    double best_gap = 0.5 * dt;
+    for (auto c : {it, it == p.schedule.steps.begin() ? it : it - 1}) {
+      if (c == p.schedule.steps.end()) continue;
+      const double gap = std::abs(c->time - t.time);
+      if (gap <= best_gap) {
+        best_gap = gap;
+        best = static_cast<std::size_t>(c - p.schedule.steps.begin());
+      }
+    }
+    if (best < p.position_fixes.size()) p.position_fixes[best] = t.position;
+  }
   return p;
 }
 

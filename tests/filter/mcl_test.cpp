@@ -3,13 +3,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
+
+#include <fmt/format.h>
 
 #include <Eigen/LU>
 
 #include "implicit/core/jet.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/filter/localization.hpp"
 #include "implicit/filter/particle_filter.hpp"
 
 namespace implicit::filter {
@@ -528,6 +532,88 @@ TEST(ParticleFilterRun, RejectsBadInput) {
   EXPECT_THROW(pf.step(Control(1, 0), bad), InvalidArgument);
   const std::vector<LabelledMeasurement> unknown{{Measurement(1, 1), 3}};
   EXPECT_THROW(pf.step(Control(1, 0), unknown), InvalidArgument);
+}
+
+// ---- GPS-aided reference track (alternative ground truth) --------------------------------
+
+// The synthetic run as a LocalizationProblem with a GPS fix (truth + N(0, gps_std^2 I)) every 8th
+// step (5 Hz at 40 Hz steps, as in the Car Park data).
+LocalizationProblem synthetic_problem(const Synthetic& s, double gps_std, bool beacons,
+                                      std::uint64_t seed) {
+  LocalizationProblem p;
+  p.map = s.map;
+  p.initial_mean = Pose(0, 0, 0);
+  p.initial_covariance = Vec<3>(0.1, 0.1, 0.02).cwiseAbs2().asDiagonal();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t n = 0; n < s.u.size(); ++n) {
+    p.schedule.steps.push_back({0.025 * static_cast<double>(n + 1), s.u[n], -1});
+    p.detections.push_back(beacons ? s.z[n] : std::vector<LabelledMeasurement>{});
+    p.truth.position.push_back(s.truth[n].head<2>());
+    p.truth.heading.push_back(s.truth[n](2));
+    Vec<2> fix(nan, nan);
+    if (n % 8 == 4) {
+      Rng rng({seed, n, 0, purpose::kData});
+      fix = s.truth[n].head<2>() + gps_std * rng.normal_vector<2>();
+    }
+    p.position_fixes.push_back(fix);
+  }
+  return p;
+}
+
+struct ReferenceErrors {
+  double gps_rmse = 0.0;        ///< fixes vs truth, over the fix steps
+  double reference_rmse = 0.0;  ///< reference track vs truth, over the same steps
+  double unaided_rmse = 0.0;    ///< the same filter without the fixes, over the same steps
+};
+
+ReferenceErrors reference_errors(const UteModel& model, bool beacons, std::uint64_t seed) {
+  const double gps_std = 0.5;
+  const Synthetic s = make_synthetic(1200, seed, model);
+  const LocalizationProblem p = synthetic_problem(s, gps_std, beacons, seed + 100);
+  ReferenceOptions ro;
+  ro.gps_std = gps_std;
+  ro.particles = 400;
+  const robot::TruthTrack ref =
+      reference_track(p, model, RangeBearingSensor(), ImplicitProposal{}, ro);
+  LocalizationProblem unaided = p;
+  for (Vec<2>& f : unaided.position_fixes) f.setConstant(std::numeric_limits<double>::quiet_NaN());
+  const robot::TruthTrack dr =
+      reference_track(unaided, model, RangeBearingSensor(), ImplicitProposal{}, ro);
+  ReferenceErrors e;
+  int k = 0;
+  for (std::size_t n = 0; n < p.position_fixes.size(); ++n) {
+    if (!p.position_fixes[n].allFinite()) continue;
+    e.gps_rmse += (p.position_fixes[n] - p.truth.position[n]).squaredNorm();
+    e.reference_rmse += (ref.position[n] - p.truth.position[n]).squaredNorm();
+    e.unaided_rmse += (dr.position[n] - p.truth.position[n]).squaredNorm();
+    ++k;
+  }
+  e.gps_rmse = std::sqrt(e.gps_rmse / k);
+  e.reference_rmse = std::sqrt(e.reference_rmse / k);
+  e.unaided_rmse = std::sqrt(e.unaided_rmse / k);
+  return e;
+}
+
+TEST(ReferenceTrack, GpsAidedReferenceIsCloserToTruthThanGps) {
+  // 150 fixes with std 0.5 m: the GPS RMSE is 0.5 sqrt(2) = 0.71 m with relative standard error
+  // 1 / (2 sqrt(150)) = 0.04, so it exceeds 0.71 (1 - 4.5 * 0.04) = 0.58 m with overwhelming
+  // probability. With beacons (range std 0.22 m, bearing 0.03 rad at <= 20 m) the fused track is
+  // a few decimetres off at most, and without them the motion model still averages ~8 fixes
+  // (config B noise: ~2 cm per step), so both references must beat the fixes themselves.
+  const UteModel model(low_noise());
+  for (const bool beacons : {true, false}) {
+    const ReferenceErrors e = reference_errors(model, beacons, 11);
+    RecordProperty(beacons ? "with_beacons" : "gps_only",
+                   fmt::format("gps {:.3f} reference {:.3f} unaided {:.3f}", e.gps_rmse,
+                               e.reference_rmse, e.unaided_rmse));
+    EXPECT_GT(e.gps_rmse, 0.58);
+    EXPECT_LT(e.reference_rmse, e.gps_rmse) << "beacons " << beacons;
+    EXPECT_LT(e.reference_rmse, 0.5) << "beacons " << beacons;  // within the GPS noise
+    // The fixes are used: without beacons the unaided filter is dead reckoning and drifts.
+    if (!beacons) {
+      EXPECT_LT(e.reference_rmse, e.unaided_rmse);
+    }
+  }
 }
 
 }  // namespace

@@ -29,6 +29,9 @@ struct LocalizationProblem {
   std::vector<std::vector<LabelledMeasurement>> detections;  ///< per step (empty: predict only)
   robot::TruthTrack truth;
   int detections_total = 0;
+  /// Per step: the truth record (e.g. a GPS fix) nearest in time within dt / 2, NaN where none.
+  /// The measurements of the GPS-aided reference run (reference_track).
+  std::vector<Vec<2>> position_fixes;
 };
 
 /// Builds the problem from a log with an `initial` record; scans are attached to the nearest step
@@ -40,6 +43,13 @@ struct LocalizationRun {
   double seconds = 0.0;      ///< wall time of the filter loop (initialisation excluded)
   double cpu_seconds = 0.0;  ///< process CPU time of the loop (all threads; = wall when idle-free)
   int resamplings = 0;
+};
+
+/// How the GPS-aided reference run is made (see reference_track).
+struct ReferenceOptions {
+  double gps_std = 0.5;          ///< [m] std of each coordinate of a fix
+  std::size_t particles = 5000;  ///< large, so that its Monte Carlo error is negligible
+  std::uint64_t seed = 1;        ///< fixed: the reference does not change with the runs' seed
 };
 
 /// CPU time of the process [s] (all threads), for "CPU time per step" figures.
@@ -66,6 +76,38 @@ LocalizationRun run_localization(const LocalizationProblem& problem, const Motio
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.cpu_seconds = process_cpu_seconds() - cpu_start;
   return run;
+}
+
+/// The paper's alternative ground truth (§4.1): an MCL run that ALSO weights by the position
+/// fixes of the problem (GPS, N(fix; position, gps_std^2 I)) with many particles; its weighted-mean
+/// path (heading: circular mean) is returned as a truth track for every step. Fusing the beacons
+/// and the fixes through the motion model, it is closer to the true path than the fixes alone.
+template <robot::MotionModel Motion, robot::LandmarkSensor Sensor, typename Proposal>
+robot::TruthTrack reference_track(const LocalizationProblem& problem, const Motion& motion,
+                                  const Sensor& sensor, const Proposal& proposal,
+                                  const ReferenceOptions& reference, FilterOptions options = {}) {
+  require(reference.gps_std > 0 && std::isfinite(reference.gps_std),
+          "reference track: expected a positive GPS std, got {}", reference.gps_std);
+  require(problem.position_fixes.size() == problem.schedule.steps.size(),
+          "reference track: expected {} position fixes (one per step, NaN for none), got {}",
+          problem.schedule.steps.size(), problem.position_fixes.size());
+  options.particles = reference.particles;
+  options.seed = reference.seed;
+  ParticleFilter pf(motion, sensor, problem.map, proposal, options);
+  pf.initialize(problem.initial_mean, problem.initial_covariance);
+  robot::TruthTrack track;
+  track.position.reserve(problem.schedule.steps.size());
+  track.heading.reserve(problem.schedule.steps.size());
+  for (std::size_t n = 0; n < problem.schedule.steps.size(); ++n) {
+    const Vec<2>& fix = problem.position_fixes[n];
+    const StepSummary& s = fix.allFinite()
+                               ? pf.step(problem.schedule.steps[n].u, problem.detections[n],
+                                         PositionFix{fix, reference.gps_std})
+                               : pf.step(problem.schedule.steps[n].u, problem.detections[n]);
+    track.position.push_back(s.mean.head<2>());
+    track.heading.push_back(s.mean(2));
+  }
+  return track;
 }
 
 struct LocalizationMetrics {

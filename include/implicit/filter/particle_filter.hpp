@@ -68,6 +68,15 @@ struct StepSummary {
   int failures = 0;                 ///< particles with a non-finite model output (weight 0)
 };
 
+/// A direct measurement of the state's position (x, y) ~ N(position, std^2 I): a GPS fix. The
+/// proposals do not see it; it multiplies each particle's weight by its likelihood after the
+/// proposal (valid importance sampling: the target gains the factor, the proposal is unchanged).
+/// Used for the GPS-aided reference run that can serve as ground truth (paper §4.1).
+struct PositionFix {
+  Vec<2> position = Vec<2>::Zero();
+  double std = 0.5;  ///< [m]
+};
+
 template <robot::MotionModel Motion, robot::LandmarkSensor Sensor, typename Proposal>
 class ParticleFilter {
  public:
@@ -145,6 +154,35 @@ class ParticleFilter {
 
   /// One motion step with control u and the detections seen after it (empty: predict only).
   const StepSummary& step(const Control& u, std::span<const LabelledMeasurement> z = {}) {
+    return step_impl(u, z, nullptr);
+  }
+
+  /// A step that also weights by a position fix (GPS) of the new state.
+  const StepSummary& step(const Control& u, std::span<const LabelledMeasurement> z,
+                          const PositionFix& fix) {
+    require(fix.position.allFinite() && fix.std > 0 && std::isfinite(fix.std),
+            "particle filter: expected a finite position fix with a positive std, got ({}, {}) "
+            "std {}",
+            fix.position(0), fix.position(1), fix.std);
+    return step_impl(u, z, &fix);
+  }
+  /// Convenience: a step with the observations of a robot log (ids mapped to map indices).
+  const StepSummary& step(const Control& u, std::span<const robot::Observation> observations,
+                          std::vector<LabelledMeasurement>& buffer) {
+    buffer.clear();
+    for (const robot::Observation& o : observations) {
+      const int k = o.landmark_id >= 0 ? map_.index_of(o.landmark_id) : -1;
+      require(o.landmark_id < 0 || k >= 0,
+              "particle filter: expected a landmark id of the map, got unknown id {}",
+              o.landmark_id);
+      buffer.push_back({o.z, k});
+    }
+    return step(u, std::span<const LabelledMeasurement>(buffer));
+  }
+
+ private:
+  const StepSummary& step_impl(const Control& u, std::span<const LabelledMeasurement> z,
+                               const PositionFix* fix) {
     require(z.size() <= static_cast<std::size_t>(MclObjective<Sensor>::kMaxTerms),
             "particle filter: expected at most {} detections per step, got {}",
             MclObjective<Sensor>::kMaxTerms, z.size());
@@ -166,10 +204,17 @@ class ParticleFilter {
       increments_[j] = proposal_.propose(context_, particles_[j], rng, next_[j], stats_[j]);
     });
     std::swap(particles_, next_);
+    if (fix) {
+      const double info = 1.0 / (fix->std * fix->std);
+      const double norm = -kLog2Pi - 2.0 * std::log(fix->std);  // log N(0; 0, std^2 I)
+      for (std::size_t j = 0; j < particles_.size(); ++j)
+        increments_[j] +=
+            norm - 0.5 * info * (particles_[j].template head<2>() - fix->position).squaredNorm();
+    }
 
     summary_ = StepSummary{};
     summary_.step = step_;
-    summary_.updated = !z.empty();
+    summary_.updated = !z.empty() || fix != nullptr;
     for (std::size_t j = 0; j < stats_.size(); ++j) {
       summary_.detections_used += weights_[j] * stats_[j].used;
       summary_.detections_dropped += weights_[j] * stats_[j].dropped;
@@ -183,21 +228,6 @@ class ParticleFilter {
     return summary_;
   }
 
-  /// Convenience: a step with the observations of a robot log (ids mapped to map indices).
-  const StepSummary& step(const Control& u, std::span<const robot::Observation> observations,
-                          std::vector<LabelledMeasurement>& buffer) {
-    buffer.clear();
-    for (const robot::Observation& o : observations) {
-      const int k = o.landmark_id >= 0 ? map_.index_of(o.landmark_id) : -1;
-      require(o.landmark_id < 0 || k >= 0,
-              "particle filter: expected a landmark id of the map, got unknown id {}",
-              o.landmark_id);
-      buffer.push_back({o.z, k});
-    }
-    return step(u, std::span<const LabelledMeasurement>(buffer));
-  }
-
- private:
   void reset_weights() {
     const double m = static_cast<double>(particles_.size());
     std::fill(log_weights_.begin(), log_weights_.end(), -std::log(m));
