@@ -350,3 +350,65 @@ TEST(PathIntegral, HardWallBadInput) {
   }
   EXPECT_NO_THROW(make({.time = 2.0, .openings = {{-1, 1}}}));
 }
+
+namespace {
+// A planar free walker (G = I, Sigma = 0.5 I) pulled towards (1, 0) by its final cost.
+struct PlanarWalker {
+  template <typename T>
+  Eigen::Matrix<T, 2, 1> drift(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    return x * 0.0;
+  }
+  template <typename T>
+  T running_cost(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    return 0.1 * x(0) * x(0);
+  }
+  template <typename T>
+  T final_cost(const Eigen::Matrix<T, 2, 1>& x) const {
+    const T a = x(0) - 1.0, b = x(1);
+    return 0.5 * (a * a + b * b);
+  }
+};
+}  // namespace
+
+TEST(PathIntegral, TwoWallsInThePlaneAgreeWithPlainMonteCarlo) {
+  // Two walls (an oblique one at t = 0.5, an axis one at t = 1) with two openings each: four
+  // modes, some with both walls clamped. Plain MC can pass these openings, so it is an
+  // independent reference; tolerance 4.5 times the combined delta-method SE of the two
+  // independent estimates.
+  ControlSpec<2, 2> s;
+  s.G.setIdentity();
+  s.noise_covariance = 0.5 * Mat<2>::Identity();
+  s.control_cost = 2.0 * Mat<2>::Identity();
+  s.horizon = 1.5;
+  s.dt = 0.05;
+  const Vec<2> diagonal = Vec<2>(1.0, 1.0).normalized();
+  std::vector<HardWall<2>> walls{
+      {.time = 0.5, .direction = diagonal, .openings = {{-1.2, -0.6}, {0.3, 0.5}}},
+      {.time = 1.0, .direction = Vec<2>(0.0, 1.0), .openings = {{-2.0, -0.4}, {0.6, 2.0}}}};
+  ControlProblem problem(PlanarWalker{}, s, walls);
+  const Vec<2> x(0.1, -0.2);
+  const auto e = estimate_log_psi_implicit(problem, x, 0, 20000, {41});
+  ASSERT_EQ(e.modes.size(), 4u);
+  int clamped_twice = 0;
+  for (const auto& m : e.modes) {
+    EXPECT_EQ(m.status, implicit::MinimizeStatus::kConverged);
+    clamped_twice += (m.clamped[0] != 0 && m.clamped[1] != 0) ? 1 : 0;
+    // Every mode's centre lies in (or on the edge of) its openings.
+    for (int i = 0; i < 2; ++i) {
+      const auto& op = walls[i].openings[static_cast<std::size_t>(m.openings[i])];
+      EXPECT_GE(m.wall_values[i], op.lower - 1e-9);
+      EXPECT_LE(m.wall_values[i], op.upper + 1e-9);
+    }
+  }
+  EXPECT_GE(clamped_twice, 1);
+  const auto mc = estimate_log_psi_monte_carlo(problem, x, 0, 400000, {42});
+  ASSERT_LT(mc.wall_hits, 400000);
+  EXPECT_NEAR(e.log_psi, mc.log_psi, 4.5 * std::hypot(e.relative_se, mc.relative_se))
+      << "SE implicit " << e.relative_se << ", MC " << mc.relative_se;
+  // The same key gives the same estimate (common random numbers for the control).
+  const auto again = estimate_log_psi_implicit(problem, x, 0, 20000, {41});
+  EXPECT_EQ(again.log_psi, e.log_psi);
+  const auto c = estimate_control(problem, x, 0, {.samples = 200}, {43});
+  EXPECT_TRUE(c.defined);
+  EXPECT_TRUE(c.u.allFinite());
+}
