@@ -18,6 +18,7 @@
 #include "implicit/core/parallel.hpp"
 #include "implicit/filter/localization.hpp"
 #include "implicit/robot/carpark.hpp"
+#include "implicit/robot/csv_table.hpp"
 
 namespace implicit::app {
 namespace {
@@ -49,7 +50,7 @@ robot::RobotLog load_log(const std::string& data, const robot::UteModel& model) 
   const std::filesystem::path path =
       data.empty() ? robot::default_carpark_dir() : std::filesystem::path(data);
   if (std::filesystem::is_directory(path)) {
-    require(std::filesystem::exists(path / "carpark_dr.csv"),
+    require(std::filesystem::exists(robot::resolve_data_file(path / "carpark_dr.csv")),
             "mcl --data: expected a Car Park folder (with carpark_dr.csv) or a robot log file, got "
             "'{}'",
             path.string());
@@ -183,8 +184,8 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   if (s.truth == "reference") {
     const std::filesystem::path data =
         s.data_dir.empty() ? robot::default_carpark_dir() : std::filesystem::path(s.data_dir);
-    const std::filesystem::path data_file =
-        std::filesystem::is_directory(data) ? data / "carpark_dr.csv" : data;
+    const std::filesystem::path data_file = robot::resolve_data_file(
+        std::filesystem::is_directory(data) ? data / "carpark_dr.csv" : data);
     // Cached next to the other outputs when --out is given, else in the system temp folder.
     const std::filesystem::path dir =
         ctx.out_dir.empty() ? std::filesystem::temp_directory_path() / "implicit-cache"

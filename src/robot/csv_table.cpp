@@ -2,7 +2,7 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
+#include <sstream>
 #include <string_view>
 
 #include <fmt/format.h>
@@ -37,10 +37,10 @@ std::string_view trim(std::string_view s) {
 
 NumericTable read_numeric_csv(const std::filesystem::path& path,
                               const std::vector<std::string>& expected_header) {
-  std::ifstream in(path);
-  if (!in) throw ParseError(fmt::format("{}: cannot open the file for reading", path.string()));
+  const std::filesystem::path resolved = resolve_data_file(path);
+  std::istringstream in(read_text_file(resolved));
   NumericTable t;
-  t.file = path.string();
+  t.file = resolved.string();
   std::string line;
   if (!std::getline(in, line))
     throw ParseError(fmt::format("{}:1: expected a header line, got an empty file", t.file));

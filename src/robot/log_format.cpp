@@ -1,5 +1,7 @@
 #include "implicit/robot/log_format.hpp"
 
+#include "implicit/robot/csv_table.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -12,6 +14,7 @@
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/robot/csv_table.hpp"
 
 namespace implicit::robot {
 namespace {
@@ -166,9 +169,9 @@ RobotLog parse_robot_log(std::istream& in, const std::string& name) {
 }
 
 RobotLog read_robot_log(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw ParseError(fmt::format("{}: cannot open the file for reading", path.string()));
-  return parse_robot_log(in, path.string());
+  const std::filesystem::path resolved = resolve_data_file(path);
+  std::istringstream in(read_text_file(resolved));  // plain or gzip-compressed
+  return parse_robot_log(in, resolved.string());
 }
 
 void write_robot_log(std::ostream& out, const RobotLog& log) {

@@ -1,6 +1,7 @@
 // The plain-text robot log and the Car Park CSV reader: round trip, and the bad-input table
 // (every message names the file, the line and the field).
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <filesystem>
 #include <fstream>
@@ -32,6 +33,75 @@ truth 0.05 0.15 0.25
 RobotLog parse(const std::string& text) {
   std::istringstream in(text);
   return parse_robot_log(in, "test.log");
+}
+
+// Writes `text` gzip-compressed to `path`.
+void write_gzip(const std::filesystem::path& path, const std::string& text) {
+  gzFile f = gzopen(path.string().c_str(), "wb9");
+  ASSERT_NE(f, nullptr);
+  ASSERT_EQ(gzwrite(f, text.data(), static_cast<unsigned>(text.size())),
+            static_cast<int>(text.size()));
+  ASSERT_EQ(gzclose(f), Z_OK);
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void write_bytes(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+
+std::filesystem::path scratch_dir(const std::string& tag) {
+  const auto dir =
+      std::filesystem::temp_directory_path() /
+      ("implicit_" + tag + "_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::string read_log_error(const std::filesystem::path& path) {
+  try {
+    read_robot_log(path);
+  } catch (const ParseError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(RobotLog, ReadsGzipTransparentlyAndRejectsDamagedGzip) {
+  const auto dir = scratch_dir("gzip_log");
+  const RobotLog plain = parse(kGood);
+  write_gzip(dir / "small.log.gz", kGood);
+  const RobotLog zipped = read_robot_log(dir / "small.log.gz");
+  std::ostringstream a, b;
+  write_robot_log(a, plain);
+  write_robot_log(b, zipped);
+  EXPECT_EQ(a.str(), b.str());
+  // The name without .gz finds the compressed file.
+  std::ostringstream c;
+  write_robot_log(c, read_robot_log(dir / "small.log"));
+  EXPECT_EQ(a.str(), c.str());
+
+  // Truncated: the 8-byte trailer (CRC, length) and some data cut off.
+  const std::string bytes = read_bytes(dir / "small.log.gz");
+  ASSERT_GT(bytes.size(), 40u);
+  write_bytes(dir / "truncated.log.gz", bytes.substr(0, bytes.size() - 20));
+  std::string msg = read_log_error(dir / "truncated.log.gz");
+  EXPECT_NE(msg.find("truncated.log.gz:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("expected a complete gzip stream, got corrupt or truncated data"),
+            std::string::npos)
+      << msg;
+  // Corrupt: the compressed body overwritten (header intact, so it is still detected as gzip).
+  std::string corrupt = bytes;
+  for (std::size_t k = 12; k < corrupt.size() - 8; ++k) corrupt[k] = static_cast<char>(0xA5 ^ k);
+  write_bytes(dir / "corrupt.log.gz", corrupt);
+  msg = read_log_error(dir / "corrupt.log.gz");
+  EXPECT_NE(msg.find("corrupt.log.gz:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("expected a complete gzip stream"), std::string::npos) << msg;
+  std::filesystem::remove_all(dir);
 }
 
 TEST(RobotLog, ParsesAndRoundTrips) {
@@ -115,7 +185,7 @@ class CarParkBadInput : public ::testing::Test {
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
     for (const auto& f : std::filesystem::directory_iterator(default_carpark_dir()))
-      if (f.path().extension() == ".csv")
+      if (f.path().extension() == ".csv" || f.path().extension() == ".gz")
         std::filesystem::copy_file(f.path(), dir_ / f.path().filename());
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
@@ -164,6 +234,26 @@ TEST_F(CarParkBadInput, ShortRow) {
   replace_line("carpark_beacons.csv", 3, "2,9.9");
   EXPECT_NE(message().find("carpark_beacons.csv:3: expected 3 fields, got 2"), std::string::npos)
       << message();
+}
+
+TEST_F(CarParkBadInput, GzippedFilesAreReadTransparently) {
+  const CarParkData plain = load_carpark(dir_);
+  for (const char* name : {"carpark_dr.csv", "carpark_laser_range_cm.csv"}) {
+    write_gzip(dir_ / (std::string(name) + ".gz"), read_bytes(dir_ / name));
+    std::filesystem::remove(dir_ / name);
+  }
+  const CarParkData zipped = load_carpark(dir_);
+  EXPECT_EQ(zipped.control_time, plain.control_time);
+  EXPECT_EQ(zipped.encoder_speed, plain.encoder_speed);
+  EXPECT_EQ(zipped.steering, plain.steering);
+  ASSERT_EQ(zipped.scans.size(), plain.scans.size());
+  for (std::size_t k = 0; k < plain.scans.size(); k += 31)
+    EXPECT_EQ(zipped.scans[k].range, plain.scans[k].range) << k;
+  // A truncated compressed file names itself and the line where the data stop.
+  const std::string bytes = read_bytes(dir_ / "carpark_dr.csv.gz");
+  write_bytes(dir_ / "carpark_dr.csv.gz", bytes.substr(0, bytes.size() / 2));
+  EXPECT_NE(message().find("carpark_dr.csv.gz:"), std::string::npos) << message();
+  EXPECT_NE(message().find("expected a complete gzip stream"), std::string::npos) << message();
 }
 
 TEST_F(CarParkBadInput, MissingFile) {

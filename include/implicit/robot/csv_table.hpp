@@ -7,7 +7,8 @@
 //
 // Every problem is a ParseError naming the file, the line (1-based, the header is line 1) and the
 // field: a missing or renamed column, a row with too few or too many fields, a field that is not a
-// finite number (NaN and inf are rejected), an empty file.
+// finite number (NaN and inf are rejected), an empty file. Files may be gzip-compressed
+// (read_text_file): `carpark_dr.csv` is read from `carpark_dr.csv.gz` when only that exists.
 
 #include <cstddef>
 #include <filesystem>
@@ -29,7 +30,19 @@ struct NumericTable {
   std::size_t line_of(std::size_t row) const { return lines[row]; }
 };
 
-/// Reads a CSV whose header must equal `expected_header` exactly.
+/// `path` if it exists, else `path` + ".gz" if that exists (so a data folder may hold its large
+/// files compressed under the same names), else `path` unchanged (the reader reports it missing).
+std::filesystem::path resolve_data_file(const std::filesystem::path& path);
+
+/// The whole content of a text file, decompressed when it is gzip-compressed (detected from the
+/// content, any name; missing files are looked up as `path`.gz too, see resolve_data_file).
+/// Throws ParseError "file:line: expected a complete gzip stream, got corrupt or truncated data
+/// ..." for a damaged gzip file (line = where the readable text stops), or when it cannot be
+/// opened. Used by every reader of robot/ (CSV tables, the robot log).
+std::string read_text_file(const std::filesystem::path& path);
+
+/// Reads a CSV whose header must equal `expected_header` exactly (gzip accepted, see
+/// read_text_file).
 NumericTable read_numeric_csv(const std::filesystem::path& path,
                               const std::vector<std::string>& expected_header);
 

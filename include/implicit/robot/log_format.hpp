@@ -19,7 +19,7 @@
 // line (anywhere in the file). Readers reject malformed input with a ParseError naming the file,
 // the line and the field ("log.txt:12: field 'bearing': expected a finite number, got 'nan'").
 //
-//   RobotLog log = read_robot_log("run.log");
+//   RobotLog log = read_robot_log("run.log");   // or "run.log.gz": gzip is read transparently
 //   write_robot_log("copy.log", log);        // round-trips exactly (17 significant digits)
 
 #include <filesystem>
