@@ -11,6 +11,8 @@
 #include <unordered_set>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/slam/dataset.hpp"
@@ -72,7 +74,9 @@ BENCHMARK(BM_Step)
     ->Unit(benchmark::kMicrosecond);
 
 // Per-step cost against the map size N: every particle starts with the N landmarks of a dense
-// field (known association) and runs along the route; the per-particle map work is O(log N).
+// field and runs along the route. With known association (assoc = 0) the per-particle map work
+// is O(log N); with maximum-likelihood association (assoc = 1) each particle also searches its
+// map for the detected landmark, through the spatial grid index once the map is large.
 void BM_StepVsLandmarks(benchmark::State& state) {
   const ThreadLimit one(1);
   const int landmarks = static_cast<int>(state.range(1));
@@ -80,6 +84,7 @@ void BM_StepVsLandmarks(benchmark::State& state) {
   const SlamDataset d = generate_synthetic(sc, SyntheticConfig(), 2);
   SlamOptions opt;
   opt.method = method_of(static_cast<int>(state.range(0)));
+  opt.association = state.range(2) == 0 ? Association::kKnown : Association::kMaximumLikelihood;
   opt.particles = 100;
   auto make = [&] {
     auto f = make_slam_filter(opt, d.initial_pose);
@@ -98,14 +103,14 @@ void BM_StepVsLandmarks(benchmark::State& state) {
     filter->step(n, d.control(n), d.observations(n));
     ++n;
   }
-  state.SetLabel(std::string(to_string(opt.method)));
+  state.SetLabel(fmt::format("{} {}", to_string(opt.method), to_string(opt.association)));
   state.counters["landmarks"] = landmarks;
   state.counters["map_bytes_per_particle"] =
       static_cast<double>(filter->map_bytes()) / opt.particles;
 }
 BENCHMARK(BM_StepVsLandmarks)
-    ->ArgsProduct({{2, 4}, {15, 100, 1000, 10000}})
-    ->ArgNames({"method", "N"})
+    ->ArgsProduct({{2, 4}, {15, 100, 1000, 10000}, {0, 1}})
+    ->ArgNames({"method", "N", "assoc"})
     ->Unit(benchmark::kMicrosecond);
 
 // Resampling M = 100 particles whose maps hold N landmarks, then one landmark update per

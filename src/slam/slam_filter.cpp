@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <unordered_set>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Cholesky>
 
@@ -15,6 +17,7 @@
 #include "implicit/core/weights.hpp"
 #include "implicit/robot/data_association.hpp"
 #include "implicit/slam/ekf_slam.hpp"
+#include "implicit/slam/landmark_index.hpp"
 #include "implicit/slam/landmark_map.hpp"
 #include "implicit/slam/proposals.hpp"
 
@@ -209,7 +212,19 @@ struct ParticleOutcome {
   int newton_not_converged = 0;
   int new_landmarks = 0;
   int updates = 0;
+  /// Landmarks written this step that the association index must (re-)register.
+  std::vector<std::pair<std::uint32_t, Vec<2>>> moved;
+  double max_cov_trace = 0.0;  ///< largest covariance trace written this step
+
+  void reset() {
+    newton_iterations = newton_solves = newton_not_converged = new_landmarks = updates = 0;
+    moved.clear();  // keeps its capacity: no allocation per particle and step
+    max_cov_trace = 0.0;
+  }
 };
+
+// Below this map size a linear scan is cheaper than the grid look-ups.
+constexpr std::size_t kIndexedAssociationMinLandmarks = 24;
 
 class ParticleSlamFilter final : public SlamFilter {
  public:
@@ -230,6 +245,7 @@ class ParticleSlamFilter final : public SlamFilter {
     LandmarkMap map;
     for (std::size_t k = 0; k < landmarks.size(); ++k) {
       map.push_back({landmarks[k], Mat<2>::Zero()});
+      index_.insert(static_cast<std::uint32_t>(k), landmarks[k]);
       slot_of_id_.push_back(static_cast<int>(k));
       id_of_slot_.push_back(static_cast<int>(k));
     }
@@ -269,7 +285,13 @@ class ParticleSlamFilter final : public SlamFilter {
     const bool weighted = std::any_of(use_.begin(), use_.end(), [](int v) { return v != 0; });
     parallel_for(
         m_, [&](std::size_t j) { step_particle(j, n, u, obs, slots_before); }, 8);
+    const bool ml = opt_.association == Association::kMaximumLikelihood;
     for (const auto& oc : outcome_) {
+      if (ml) {
+        // Sequential, after the parallel particle loop: the index is shared.
+        for (const auto& [slot, mean] : oc.moved) index_.insert(slot, mean);
+        cov_trace_bound_ = std::max(cov_trace_bound_, oc.max_cov_trace);
+      }
       stats_.newton_iterations += static_cast<std::size_t>(oc.newton_iterations);
       stats_.newton_solves += static_cast<std::size_t>(oc.newton_solves);
       stats_.newton_not_converged += static_cast<std::size_t>(oc.newton_not_converged);
@@ -299,7 +321,13 @@ class ParticleSlamFilter final : public SlamFilter {
       ++stats_.weighted_steps;
       stats_.ess_fraction_sum += ws.ess / static_cast<double>(m_);
     }
+    map_from_previous_ = false;
     if (needs_resampling(ws.ess, m_, opt_.resample_threshold)) {
+      // The map estimate, like the pose estimate, uses the weights of this step BEFORE
+      // resampling (spec §4): resampling only adds Monte Carlo noise to a weighted mean. The
+      // old population stays in next_ after the swap (its maps are shared, so this is free).
+      previous_w_ = w_;
+      map_from_previous_ = true;
       Rng rng({opt_.seed, n, 0, purpose::kResampling});
       const auto ancestors = resample(ResamplingScheme::kSystematic, w_, m_, rng);
       for (std::size_t j = 0; j < m_; ++j) {
@@ -316,17 +344,19 @@ class ParticleSlamFilter final : public SlamFilter {
 
   MapEstimate map() const override {
     MapEstimate out;
+    const std::vector<Particle>& particles = map_from_previous_ ? next_ : particles_;
+    const std::vector<double>& w = map_from_previous_ ? previous_w_ : w_;
     if (opt_.association == Association::kKnown) {
-      const std::size_t k = particles_[0].map.size();
+      const std::size_t k = particles[0].map.size();
       out.landmarks.assign(k, Landmark::Zero());
       for (std::size_t j = 0; j < m_; ++j)
-        particles_[j].map.for_each(
-            [&](std::size_t i, const LandmarkEstimate& l) { out.landmarks[i] += w_[j] * l.mean; });
+        particles[j].map.for_each(
+            [&](std::size_t i, const LandmarkEstimate& l) { out.landmarks[i] += w[j] * l.mean; });
       out.ids.assign(id_of_slot_.begin(), id_of_slot_.begin() + static_cast<std::ptrdiff_t>(k));
     } else {
       const std::size_t best =
-          static_cast<std::size_t>(std::max_element(w_.begin(), w_.end()) - w_.begin());
-      particles_[best].map.for_each([&](std::size_t, const LandmarkEstimate& l) {
+          static_cast<std::size_t>(std::max_element(w.begin(), w.end()) - w.begin());
+      particles[best].map.for_each([&](std::size_t, const LandmarkEstimate& l) {
         out.landmarks.push_back(l.mean);
         out.ids.push_back(-1);
       });
@@ -373,8 +403,9 @@ class ParticleSlamFilter final : public SlamFilter {
     thread_local std::vector<LandmarkTerm> terms;
     known.clear();
     fresh.clear();
+    thread_local std::vector<std::uint32_t> candidates;
     ParticleOutcome& oc = outcome_[j];
-    oc = ParticleOutcome{};
+    oc.reset();
     Particle& p = particles_[j];
     const RangeBearingSensor& s = opt_.sensor;
     const Mat<2>& r = s.noise_covariance();
@@ -397,21 +428,12 @@ class ParticleSlamFilter final : public SlamFilter {
           known.push_back(known_landmark(slot, obs[i].z, p.map.get(slot)));
         continue;
       }
-      const auto a = robot::associate_max_likelihood(
-          static_cast<int>(p.map.size()),
-          [&](int k, Measurement& e, Mat<2>& sk) {
-            const LandmarkEstimate& l = p.map.get(static_cast<std::size_t>(k));
-            const double dx = l.mean(0) - f(0), dy = l.mean(1) - f(1);
-            // Cheap pre-gate: a landmark whose range differs grossly cannot pass chi^2 = 9.21.
-            if (std::abs(std::sqrt(dx * dx + dy * dy) - obs[i].z(0)) > 10.0 + 0.5 * obs[i].z(0))
-              return false;
-            e = RangeBearingSensor::residual(s.predict(f, l.mean), obs[i].z);
-            const Mat23 hx = s.jacobian_pose(f, l.mean);
-            const Mat<2> hm = -hx.leftCols<2>();
-            sk = hx * sigma1 * hx.transpose() + hm * l.cov * hm.transpose() + r;
-            return true;
-          },
-          opt_.gate_chi2);
+      // Same association either way (landmark_index.hpp); the index makes it O(1) in N.
+      const auto a =
+          p.map.size() < kIndexedAssociationMinLandmarks
+              ? associate_scan(p.map, s, f, sigma1, obs[i].z, opt_.gate_chi2, cov_trace_bound_)
+              : associate_indexed(p.map, index_, cov_trace_bound_, s, f, sigma1, obs[i].z,
+                                  opt_.gate_chi2, candidates);
       if (a.matched()) {
         const auto slot = static_cast<std::size_t>(a.index);
         known.push_back(known_landmark(slot, obs[i].z, p.map.get(slot)));
@@ -441,6 +463,7 @@ class ParticleSlamFilter final : public SlamFilter {
         const Vec<5> xi = rng.normal_vector<5>();
         const Vec<5> sample =
             F.minimizer() + l.transpose().triangularView<Eigen::Upper>().solve(xi);
+        oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()), sample.tail<2>());
         log_inc = 2.5 * kLog2Pi - l.diagonal().array().log().sum() + 0.5 * xi.squaredNorm() -
                   F.evaluate(sample) - F.constant() + std::log(opt_.new_landmark_density) -
                   std::log(fresh[0](0));
@@ -522,6 +545,9 @@ class ParticleSlamFilter final : public SlamFilter {
         Mat<2> c = a * l.cov * a.transpose() + gain * r * gain.transpose();
         l.cov = 0.5 * (c + c.transpose());
         p.map.set(k.slot, l);
+        oc.max_cov_trace = std::max(oc.max_cov_trace, l.cov.trace());
+        if (!index_.same_cell(l.mean, k.mean))
+          oc.moved.emplace_back(static_cast<std::uint32_t>(k.slot), l.mean);
         ++oc.updates;
       }
     } else {
@@ -530,8 +556,12 @@ class ParticleSlamFilter final : public SlamFilter {
     if (!landmark_placed) {
       for (const Measurement& z : fresh) {
         const Mat<2> gz = RangeBearingSensor::inverse_jacobian_measurement(x, z);
-        p.map.push_back({RangeBearingSensor::inverse(x, z),
-                         point_landmarks ? Mat<2>::Zero() : Mat<2>(gz * r * gz.transpose())});
+        const LandmarkEstimate fresh_landmark{
+            RangeBearingSensor::inverse(x, z),
+            point_landmarks ? Mat<2>::Zero() : Mat<2>(gz * r * gz.transpose())};
+        oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()), fresh_landmark.mean);
+        oc.max_cov_trace = std::max(oc.max_cov_trace, fresh_landmark.cov.trace());
+        p.map.push_back(fresh_landmark);
         log_inc += std::log(opt_.new_landmark_density);
         ++oc.new_landmarks;
       }
@@ -544,11 +574,17 @@ class ParticleSlamFilter final : public SlamFilter {
   std::size_t m_;
   std::vector<Particle> particles_, next_;
   std::vector<double> log_w_, w_;
+  std::vector<double> previous_w_;  ///< weights before the last resampling (map estimate)
+  bool map_from_previous_ = false;  ///< the last step resampled: estimate from next_
   std::vector<ParticleOutcome> outcome_;
   std::vector<int> slot_of_id_, id_of_slot_;
   std::vector<int> slots_, use_;
   PoseEstimate estimate_;
   SlamStats stats_;
+  // ML association: one grid index shared by all particles, and an upper bound on the traces of
+  // all landmark covariances ever written (EKF updates only shrink them).
+  LandmarkGridIndex index_;
+  double cov_trace_bound_ = 0.0;
 };
 
 }  // namespace

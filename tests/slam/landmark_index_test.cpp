@@ -1,0 +1,203 @@
+// Spatial index for maximum-likelihood association: the indexed search must return exactly the
+// association of the linear scan, and its search disc must contain every landmark inside the gate.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/rng.hpp"
+#include "implicit/robot/ute_model.hpp"
+#include "implicit/slam/dataset.hpp"
+#include "implicit/slam/evaluate.hpp"
+#include "implicit/slam/landmark_index.hpp"
+
+namespace implicit::slam {
+namespace {
+
+using robot::RangeBearingSensor;
+
+// A random SPD 2x2 covariance with trace <= max_trace.
+Mat<2> random_cov(Rng& rng, double max_trace) {
+  const double a = rng.uniform(), b = rng.uniform(), c = rng.uniform() - 0.5;
+  Mat<2> l;
+  l << a, 0.0, c, b;
+  Mat<2> p = l * l.transpose() + 1e-6 * Mat<2>::Identity();
+  return p * (max_trace * rng.uniform() / p.trace());
+}
+
+// One random association problem: a map with landmarks around the pose, many of them placed on
+// or within 1e-12 m of cell borders, and a detection of one of them (or of nothing).
+struct Case {
+  LandmarkMap map;
+  LandmarkGridIndex index;
+  double trace_bound = 0.0;
+  Pose f = Pose::Zero();
+  Mat<3> sigma1 = Mat<3>::Zero();
+  Measurement z = Measurement::Zero();
+};
+
+Case make_case(std::uint64_t k) {
+  Rng rng({11, k, 0, purpose::kData});
+  Case c;
+  const double cell = c.index.cell_size();
+  c.f = Pose(40.0 * (rng.uniform() - 0.5), 40.0 * (rng.uniform() - 0.5), 6.0 * rng.uniform());
+  const robot::UteModel model{robot::UteParams{}};
+  const Control u(0.5 + 3.0 * rng.uniform(), 0.4 * (rng.uniform() - 0.5));
+  // Scale Sigma1 up to 100x so that the disc bound is exercised with large pose uncertainty.
+  c.sigma1 = model.process_covariance(c.f, u) * (1.0 + 99.0 * rng.uniform() * rng.uniform());
+  const double max_trace = k % 3 == 0 ? 0.0 : (k % 3 == 1 ? 0.3 : 5.0);
+  const int n = 30 + static_cast<int>(rng.uniform() * 300);
+  for (int i = 0; i < n; ++i) {
+    Vec<2> m = c.f.head<2>() + Vec<2>(50.0 * (rng.uniform() - 0.5), 50.0 * (rng.uniform() - 0.5));
+    const double v = rng.uniform();
+    if (v < 0.3) m(0) = cell * std::round(m(0) / cell);  // on a vertical border
+    if (v > 0.2 && v < 0.5) m(1) = cell * std::round(m(1) / cell);
+    if (v > 0.9) m(0) = cell * std::round(m(0) / cell) + (rng.uniform() < 0.5 ? -1e-12 : 1e-12);
+    const LandmarkEstimate l{m, random_cov(rng, max_trace)};
+    c.map.push_back(l);
+    c.index.insert(static_cast<std::uint32_t>(i), m);
+    c.trace_bound = std::max(c.trace_bound, l.cov.trace());
+  }
+  const RangeBearingSensor s;
+  if (rng.uniform() < 0.8) {
+    const auto target = static_cast<std::size_t>(rng.uniform() * static_cast<double>(n));
+    const Vec<2> noise(0.3 * rng.normal(), 0.05 * rng.normal());
+    c.z = s.predict(c.f, c.map.get(std::min(target, c.map.size() - 1)).mean) + noise;
+  } else {
+    c.z = Measurement(1.0 + 14.0 * rng.uniform(), kPi * rng.uniform());
+  }
+  c.z(0) = std::max(c.z(0), 0.05);
+  return c;
+}
+
+TEST(LandmarkIndex, IndexedAssociationEqualsLinearScanOnRandomCases) {
+  const RangeBearingSensor s;
+  int matched = 0;
+  for (std::uint64_t k = 0; k < 3000; ++k) {
+    const Case c = make_case(k);
+    const double gate = k % 2 ? 9.21 : 30.0;
+    std::vector<std::uint32_t> scratch;
+    const auto scan = associate_scan(c.map, s, c.f, c.sigma1, c.z, gate);
+    const auto idx =
+        associate_indexed(c.map, c.index, c.trace_bound, s, c.f, c.sigma1, c.z, gate, scratch);
+    ASSERT_EQ(scan.index, idx.index) << "case " << k;
+    if (scan.matched()) {
+      ASSERT_EQ(scan.mahalanobis2, idx.mahalanobis2) << "case " << k;
+      ++matched;
+    }
+    // The scan without the cheap range check (plain gate) agrees as well.
+    const auto plain = robot::associate_max_likelihood(
+        static_cast<int>(c.map.size()),
+        [&](int i, Measurement& e, Mat<2>& sk) {
+          const LandmarkEstimate& l = c.map.get(static_cast<std::size_t>(i));
+          e = RangeBearingSensor::residual(s.predict(c.f, l.mean), c.z);
+          const robot::Mat23 hx = s.jacobian_pose(c.f, l.mean);
+          const Mat<2> hm = -hx.leftCols<2>();
+          sk = hx * c.sigma1 * hx.transpose() + hm * l.cov * hm.transpose() + s.noise_covariance();
+          return true;
+        },
+        gate);
+    ASSERT_EQ(plain.index, scan.index) << "case " << k;
+  }
+  // Most detections come from a landmark: the comparison must not be vacuous.
+  EXPECT_GT(matched, 1500);
+}
+
+TEST(LandmarkIndex, SearchDiscContainsEveryLandmarkInsideTheGate) {
+  const RangeBearingSensor s;
+  std::size_t inside_gate = 0;
+  for (std::uint64_t k = 0; k < 2000; ++k) {
+    const Case c = make_case(k + 10000);
+    const SearchDisc disc = association_search_disc(s, c.f, c.sigma1, c.z, c.trace_bound, 9.21);
+    c.map.for_each([&](std::size_t i, const LandmarkEstimate& l) {
+      const Measurement e = RangeBearingSensor::residual(s.predict(c.f, l.mean), c.z);
+      const robot::Mat23 hx = s.jacobian_pose(c.f, l.mean);
+      const Mat<2> hm = -hx.leftCols<2>();
+      const Mat<2> sk =
+          hx * c.sigma1 * hx.transpose() + hm * l.cov * hm.transpose() + s.noise_covariance();
+      double d2 = 0, log_det = 0;
+      if (!robot::innovation_statistics(e, sk, d2, log_det) || d2 > 9.21) return;
+      ++inside_gate;
+      ASSERT_LE((l.mean - disc.center).norm(), disc.radius) << "case " << k << " slot " << i;
+      const double range = (l.mean - c.f.head<2>()).norm();
+      ASSERT_LE(std::abs(range - c.z(0)), disc.range_margin) << "case " << k << " slot " << i;
+    });
+  }
+  EXPECT_GT(inside_gate, 1000u);
+}
+
+TEST(LandmarkIndex, MovedLandmarksAndSharedSlotsStayFindable) {
+  // Two "particles" share slots 0..n-1, then each moves a landmark into another cell and one
+  // creates slot n at a place where the other has nothing.
+  const RangeBearingSensor s;
+  LandmarkGridIndex index;
+  LandmarkMap a;
+  for (int i = 0; i < 40; ++i) {
+    const Vec<2> m(2.0 * i, i % 2 ? 5.0 : -5.0);
+    a.push_back({m, 0.01 * Mat<2>::Identity()});
+    index.insert(static_cast<std::uint32_t>(i), m);
+  }
+  LandmarkMap b = a;
+  LandmarkEstimate moved = b.get(10);
+  moved.mean += Vec<2>(0.0, 9.0);  // from y = -5 to y = 4: another cell
+  b.set(10, moved);
+  index.insert(10, moved.mean);
+  a.push_back({Vec<2>(30.0, 30.0), 0.01 * Mat<2>::Identity()});
+  index.insert(40, Vec<2>(30.0, 30.0));
+  EXPECT_EQ(a.get(10).mean, Vec<2>(20.0, -5.0));  // the other particle is untouched
+  const Mat<3> sigma1 = 1e-4 * Mat<3>::Identity();
+  std::vector<std::uint32_t> scratch;
+  for (const LandmarkMap* map : {&a, &b})
+    for (double x = -2.0; x < 82.0; x += 1.7)
+      for (double bearing = 0.0; bearing <= kPi; bearing += 0.2) {
+        const Pose f(x, 0.0, kPi / 2);
+        const Measurement z(5.5, bearing);
+        const auto scan = associate_scan(*map, s, f, sigma1, z, 9.21);
+        const auto idx = associate_indexed(*map, index, 0.02, s, f, sigma1, z, 9.21, scratch);
+        ASSERT_EQ(scan.index, idx.index) << x << " " << bearing;
+      }
+  // The moved landmark is found where particle b has it, and not where it was.
+  const auto hit =
+      associate_indexed(b, index, 0.02, s, Pose(20.0, 0.0, kPi / 2), 1e-4 * Mat<3>::Identity(),
+                        Measurement(4.0, kPi / 2), 9.21, scratch);
+  EXPECT_EQ(hit.index, 10);
+}
+
+TEST(LandmarkIndex, BadCellSizeAndNonFinitePositions) {
+  EXPECT_THROW(LandmarkGridIndex(0.0), InvalidArgument);
+  EXPECT_THROW(LandmarkGridIndex(-1.0), InvalidArgument);
+  LandmarkGridIndex index;
+  index.insert(0, Vec<2>(std::nan(""), 1.0));
+  EXPECT_EQ(index.entries(), 0u);
+  index.insert(1, Vec<2>(1.0, 1.0));
+  index.insert(1, Vec<2>(1.5, 1.5));  // same cell, same slot: registered once
+  EXPECT_EQ(index.entries(), 1u);
+}
+
+TEST(SlamMetrics, MapShapeIsZeroForARigidlyMovedMap) {
+  // Closed form: the estimate is the true map rotated by 0.2 rad and shifted; the shape error
+  // after the rigid alignment must vanish, the raw error must not.
+  SlamDataset d;
+  SlamDatasetBuilder b(d);
+  d.initial_pose = Pose(0, 0, 0);
+  d.landmarks = {Vec<2>(1, 2), Vec<2>(5, -1), Vec<2>(-3, 4), Vec<2>(7, 7)};
+  b.begin_step(Control(1, 0));
+  d.truth = {Pose(0, 0, 0), Pose(1, 0, 0)};
+  SlamRun run;
+  run.path = d.truth;
+  run.path_cov.assign(2, Mat<3>::Identity());
+  Mat<2> r;
+  r << std::cos(0.2), -std::sin(0.2), std::sin(0.2), std::cos(0.2);
+  for (std::size_t k = 0; k < d.landmarks.size(); ++k) {
+    run.map.landmarks.push_back(r * d.landmarks[k] + Vec<2>(3, -2));
+    run.map.ids.push_back(static_cast<int>(k));
+  }
+  const SlamMetrics m = evaluate(d, run);
+  EXPECT_LT(m.map_shape_m, 1e-12);
+  EXPECT_GT(m.rmse_map_m, 1.0);
+  EXPECT_NEAR(m.alignment_angle_rad, -0.2, 1e-12);
+}
+
+}  // namespace
+}  // namespace implicit::slam
