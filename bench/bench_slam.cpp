@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <unordered_set>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "implicit/core/rng.hpp"
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/evaluate.hpp"
+#include "implicit/slam/landmark_index.hpp"
 #include "implicit/slam/landmark_map.hpp"
 #include "implicit/slam/slam_filter.hpp"
 
@@ -112,6 +114,54 @@ BENCHMARK(BM_StepVsLandmarks)
     ->ArgsProduct({{2, 4}, {15, 100, 1000, 10000}, {0, 1}})
     ->ArgNames({"method", "N", "assoc"})
     ->Unit(benchmark::kMicrosecond);
+
+// One maximum-likelihood association at a FIXED landmark density (one landmark per 25 m^2, the
+// field growing with N): the linear scan (mode 0) is O(N), the grid index (mode 1) scores only
+// the landmarks near the detection and walks the landmark tree, O(log N).
+void BM_AssociationVsLandmarks(benchmark::State& state) {
+  const auto n = static_cast<std::size_t>(state.range(0));
+  const bool indexed = state.range(1) != 0;
+  const double side = std::sqrt(25.0 * static_cast<double>(n));
+  Rng rng({5, n, 0, purpose::kData});
+  LandmarkMap map;
+  LandmarkGridIndex index;
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec<2> m(side * rng.uniform(), side * rng.uniform());
+    map.push_back({m, 0.05 * Mat<2>::Identity()});
+    index.insert(static_cast<std::uint32_t>(k), m);
+  }
+  const robot::RangeBearingSensor sensor;
+  const robot::UteModel model{robot::UteParams{}};
+  // Detections of random landmarks from 8 m away, facing them.
+  constexpr std::size_t kQueries = 256;
+  std::vector<Pose> poses(kQueries);
+  std::vector<Measurement> zs(kQueries);
+  for (std::size_t q = 0; q < kQueries; ++q) {
+    const Vec<2> m =
+        map.get(static_cast<std::size_t>(rng.uniform() * static_cast<double>(n)) % n).mean;
+    const double a = 2.0 * kPi * rng.uniform();
+    poses[q] = Pose(m(0) - 8.0 * std::cos(a), m(1) - 8.0 * std::sin(a), a);
+    zs[q] = sensor.predict(poses[q], m) + Vec<2>(0.2 * rng.normal(), 0.03 * rng.normal());
+  }
+  const Mat<3> sigma1 = model.process_covariance(poses[0], Control(3.0, 0.05));
+  std::vector<std::uint32_t> scratch;
+  std::size_t q = 0, matched = 0;
+  for (auto _ : state) {
+    const auto a = indexed ? associate_indexed(map, index, 0.1, sensor, poses[q], sigma1, zs[q],
+                                               robot::kChiSquare2Dof99, scratch)
+                           : associate_scan(map, sensor, poses[q], sigma1, zs[q],
+                                            robot::kChiSquare2Dof99, 0.1);
+    matched += a.matched() ? 1 : 0;
+    benchmark::DoNotOptimize(a);
+    q = (q + 1) % kQueries;
+  }
+  state.SetLabel(indexed ? "grid index" : "linear scan");
+  state.counters["matched"] = static_cast<double>(matched) /
+                              static_cast<double>(std::max<std::size_t>(1, state.iterations()));
+}
+BENCHMARK(BM_AssociationVsLandmarks)
+    ->ArgsProduct({{100, 1000, 10000, 100000}, {0, 1}})
+    ->ArgNames({"N", "indexed"});
 
 // Resampling M = 100 particles whose maps hold N landmarks, then one landmark update per
 // particle (what the next step does): copy-on-write maps vs plain vectors deep-copied.
