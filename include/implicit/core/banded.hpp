@@ -275,34 +275,9 @@ BandedMinimizeResult<T::Block> minimize_banded(const T& f, const Eigen::VectorXd
     }
     step = -r.gradient;
     if (factored) r.factor.solve_in_place(step);
-    double slope = r.gradient.dot(step);
-    if (!(slope < 0.0)) {  // not a descent direction: steepest descent
-      step = -r.gradient;
-      slope = -r.gradient.squaredNorm();
-    }
-    const double t =
-        detail::armijo_backtrack(f, r.x, step, r.value, slope, options, trial, r.evaluations);
-    const bool accepted = t > 0.0;
-    const double step_size = t * step.cwiseAbs().maxCoeff();
-    const double x_scale = 1.0 + r.x.cwiseAbs().maxCoeff();
-    if (!accepted) {
-      r.status = step.cwiseAbs().maxCoeff() <= options.step_tolerance * x_scale * 1e3
-                     ? MinimizeStatus::kConverged
-                     : MinimizeStatus::kLineSearchFailed;
-      break;
-    }
-    r.x = trial;
-    r.value = f.evaluate(r.x, &r.gradient, &r.hessian);
-    ++r.evaluations;
-    if (!std::isfinite(r.value) || !r.gradient.allFinite() || !r.hessian.all_finite()) {
-      r.status = MinimizeStatus::kNonFinite;
-      return r;
-    }
-    if (step_size <= options.step_tolerance * x_scale) {
-      ++r.iterations;
-      r.status = MinimizeStatus::kConverged;
-      break;
-    }
+    const auto outcome = detail::newton_line_step(f, r, step, trial, options);
+    if (outcome == detail::StepOutcome::kNonFinite) return r;
+    if (outcome == detail::StepOutcome::kStop) break;
   }
   // Leave `factor` as the Cholesky of the exact Hessian at the final point.
   if (!r.factor.compute(r.hessian) && r.status == MinimizeStatus::kConverged)

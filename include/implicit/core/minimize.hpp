@@ -94,6 +94,54 @@ double armijo_backtrack(const F& f, const V& x, const V& step, double value, dou
   }
   return 0.0;
 }
+
+/// Finiteness of a Hessian in either storage: dense Eigen or a structured type with all_finite().
+template <typename H>
+bool hessian_finite(const H& h) {
+  if constexpr (requires { h.allFinite(); })
+    return h.allFinite();
+  else
+    return h.all_finite();
+}
+
+enum class StepOutcome { kContinue, kStop, kNonFinite };
+
+/// The part of a Newton iteration after the direction is known, shared by the dense and banded
+/// loops so that both apply the same safeguards: steepest descent when `step` is not a descent
+/// direction, Armijo backtracking, the move, and the convergence tests. Sets r.status when the
+/// loop must end.
+template <typename F, typename Result, typename V>
+StepOutcome newton_line_step(const F& f, Result& r, V& step, V& trial,
+                             const MinimizeOptions& options) {
+  double slope = r.gradient.dot(step);
+  if (!(slope < 0.0)) {
+    step = -r.gradient;
+    slope = -r.gradient.squaredNorm();
+  }
+  const double t = armijo_backtrack(f, r.x, step, r.value, slope, options, trial, r.evaluations);
+  const double x_scale = 1.0 + r.x.cwiseAbs().maxCoeff();
+  if (!(t > 0.0)) {
+    // No decrease possible at machine precision: converged if the full step was already tiny.
+    r.status = step.cwiseAbs().maxCoeff() <= options.step_tolerance * x_scale * 1e3
+                   ? MinimizeStatus::kConverged
+                   : MinimizeStatus::kLineSearchFailed;
+    return StepOutcome::kStop;
+  }
+  const double step_size = t * step.cwiseAbs().maxCoeff();  // t is a power of 2: exact
+  r.x = trial;
+  r.value = f.evaluate(r.x, &r.gradient, &r.hessian);
+  ++r.evaluations;
+  if (!std::isfinite(r.value) || !r.gradient.allFinite() || !hessian_finite(r.hessian)) {
+    r.status = MinimizeStatus::kNonFinite;
+    return StepOutcome::kNonFinite;
+  }
+  if (step_size <= options.step_tolerance * x_scale) {
+    ++r.iterations;
+    r.status = MinimizeStatus::kConverged;
+    return StepOutcome::kStop;
+  }
+  return StepOutcome::kContinue;
+}
 }  // namespace detail
 
 /// Minimises `f` from x0 by damped Newton. Never throws on algorithm failure; see `status`.
@@ -143,35 +191,9 @@ MinimizeResult<T::Dim> minimize(const T& f, const typename T::Vector& x0,
     } else {
       step = -r.gradient;
     }
-    double slope = r.gradient.dot(step);
-    if (!(slope < 0.0)) {  // not a descent direction: fall back to steepest descent
-      step = -r.gradient;
-      slope = -r.gradient.squaredNorm();
-    }
-    const double t =
-        detail::armijo_backtrack(f, r.x, step, r.value, slope, options, trial, r.evaluations);
-    const bool accepted = t > 0.0;
-    const double step_size = (t * step).cwiseAbs().maxCoeff();
-    const double x_scale = 1.0 + r.x.cwiseAbs().maxCoeff();
-    if (!accepted) {
-      // No decrease possible at machine precision: converged if the full step was already tiny.
-      r.status = step.cwiseAbs().maxCoeff() <= options.step_tolerance * x_scale * 1e3
-                     ? MinimizeStatus::kConverged
-                     : MinimizeStatus::kLineSearchFailed;
-      break;
-    }
-    r.x = trial;
-    r.value = f.evaluate(r.x, &r.gradient, &r.hessian);
-    ++r.evaluations;
-    if (!std::isfinite(r.value) || !r.gradient.allFinite() || !r.hessian.allFinite()) {
-      r.status = MinimizeStatus::kNonFinite;
-      return r;
-    }
-    if (step_size <= options.step_tolerance * x_scale) {
-      ++r.iterations;
-      r.status = MinimizeStatus::kConverged;
-      break;
-    }
+    const auto outcome = detail::newton_line_step(f, r, step, trial, options);
+    if (outcome == detail::StepOutcome::kNonFinite) return r;
+    if (outcome == detail::StepOutcome::kStop) break;
   }
   if (r.status == MinimizeStatus::kConverged) {
     llt.compute(r.hessian);
