@@ -597,6 +597,21 @@ TEST(ParticleFilterRun, DeterministicAcrossThreadCounts) {
     EXPECT_EQ(a[k].log_likelihood_increment, b[k].log_likelihood_increment) << k;
     EXPECT_EQ(c[k].mean, d[k].mean) << k;
   }
+  // Above 2048 particles the summary's trigonometry runs in parallel too.
+  const Synthetic shorter = make_synthetic(40, 9, model);
+  std::vector<StepSummary> e, f;
+  {
+    ThreadLimit limit(1);
+    e = run(shorter, model, ImplicitProposal{}, 3000, 4);
+  }
+  {
+    ThreadLimit limit(2);
+    f = run(shorter, model, ImplicitProposal{}, 3000, 4);
+  }
+  for (std::size_t k = 0; k < e.size(); ++k) {
+    EXPECT_EQ(e[k].mean, f[k].mean) << k;
+    EXPECT_EQ(e[k].covariance, f[k].covariance) << k;
+  }
 }
 
 TEST(ParticleFilterRun, RejectsBadInput) {

@@ -113,6 +113,8 @@ class ParticleFilter {
     log_weights_.assign(m, -std::log(static_cast<double>(m)));
     weights_.assign(m, 1.0 / static_cast<double>(m));
     increments_.resize(m);
+    sin_.resize(m);
+    cos_.resize(m);
     stats_.resize(m);
   }
 
@@ -262,12 +264,25 @@ class ParticleFilter {
 
   void summarize() {
     const std::size_t m = particles_.size();
+    // The sines and cosines of the circular mean in parallel for large M (per particle, so the
+    // values do not depend on the thread count; the sums below stay serial and in order). They
+    // run at every 40 Hz step, serially they were ~6 % of a whole M = 10 000 run; for small M
+    // the hand-off to the worker threads would cost more than it saves.
+    auto trig = [&](std::size_t j) {
+      sin_[j] = std::sin(particles_[j](2));
+      cos_[j] = std::cos(particles_[j](2));
+    };
+    if (m >= 2048) {
+      parallel_for(m, trig, 256);
+    } else {
+      for (std::size_t j = 0; j < m; ++j) trig(j);
+    }
     double sx = 0.0, sy = 0.0, ss = 0.0, sc = 0.0;
     for (std::size_t j = 0; j < m; ++j) {
       sx += weights_[j] * particles_[j](0);
       sy += weights_[j] * particles_[j](1);
-      ss += weights_[j] * std::sin(particles_[j](2));
-      sc += weights_[j] * std::cos(particles_[j](2));
+      ss += weights_[j] * sin_[j];
+      sc += weights_[j] * cos_[j];
     }
     Pose mean(sx, sy, std::atan2(ss, sc));
     Mat3 cov = Mat3::Zero();
@@ -289,6 +304,7 @@ class ParticleFilter {
   ProposalContext<Motion, Sensor> context_;
   std::vector<Pose> particles_, next_;
   std::vector<double> log_weights_, weights_, increments_;
+  std::vector<double> sin_, cos_;  ///< of each particle's heading (summarize's scratch)
   std::vector<ParticleStats> stats_;
   std::uint64_t step_ = 0;
   StepSummary summary_;
