@@ -3,7 +3,8 @@
 //    (unlabelled detections, association over a 15-landmark map included);
 //  * one prediction-only step of one particle;
 //  * a whole Car Park run (5000 steps, 505 scans) at M = 100 and M = 10 000, 1 and 2 threads.
-// Per-particle benchmarks: one iteration = one particle (read the CPU column). Whole runs: the
+// Per-particle benchmarks: one iteration = one particle (read the CPU column; the counter
+// `evaluations` is the Newton objective evaluations per particle). Whole runs: the
 // counter ms_per_step (wall time of the filter loop / 5000 steps).
 #include <benchmark/benchmark.h>
 
