@@ -93,18 +93,18 @@ int main(int argc, char** argv) {
   // A gate at t = 1: x(1)_y must lie in (-0.8, -0.4) or (0.4, 0.8) (direction a = (0, 1)). The
   // estimator enumerates the two openings, minimises F under each (the path value at the gate
   // clamped to the nearest edge if the free minimiser misses it), and samples a mixture of the
-  // two Laplace approximations; samples that hit the gate get weight 0. (Walls need the linear
-  // map: the mixture needs its proposal density.)
+  // two Laplace approximations; samples that hit the gate get weight 0. With --map random each
+  // sample runs the random map inside the openings of the mode it picked.
   const ic::HardWall<2> gate{
-      .time = 1.0, .direction = implicit::Vec<2>(0.0, 1.0), .openings = {{-0.8, -0.4}, {0.4, 0.8}}};
+      .time = 0.5, .direction = implicit::Vec<2>(0.0, 1.0), .openings = {{-0.6, -0.3}, {0.3, 0.6}}};
   const ic::ControlProblem gated(WindyRobot{}, spec, {gate});
-  const auto g = ic::estimate_log_psi_implicit(gated, x0, 0, 200, {.seed = 2});
+  const auto g = ic::estimate_log_psi_implicit(gated, x0, 0, 200, {.seed = 2}, {}, {}, map);
   std::printf("with the gate: log psi %.4f +- %.4f, ESS %.1f of 200, %d samples hit the gate\n",
               g.log_psi, g.relative_se, g.ess, g.wall_hits);
   for (const auto& m : g.modes)
     std::printf("  opening %d: mixture weight %.3f, F at its minimum %.3f, %d of %d samples hit\n",
                 m.openings[0], std::exp(m.log_weight), m.phi, m.wall_hits, m.samples);
-  const auto gc = ic::estimate_control(gated, x0, 0, {.samples = 200}, {.seed = 2});
+  const auto gc = ic::estimate_control(gated, x0, 0, {.samples = 200, .map = map}, {.seed = 2});
   std::printf("  control at x0: (%.3f, %.3f)\n", gc.u(0), gc.u(1));
   return 0;
 }

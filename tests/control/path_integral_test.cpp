@@ -293,6 +293,12 @@ TEST(PathIntegral, HardWallMixtureReproducesTheDoubleSlit) {
     EXPECT_GT(e.wall_hits, 3000);
     EXPECT_LT(e.wall_hits, 7000);
     EXPECT_EQ(e.modes[0].samples + e.modes[1].samples, 10000);
+    // The random map inside each mode's opening (F is convex: exact), weights divided by pi_c.
+    const auto r =
+        estimate_log_psi_implicit(problem, Vec<1>(x), 0, 10000, {34}, {}, {}, SamplingMap::kRandom);
+    EXPECT_EQ(r.map_failures, 0);
+    EXPECT_NEAR(r.log_psi, slit_exact_log_psi(x), 4.5 * r.relative_se) << "x = " << x;
+    EXPECT_LT(r.relative_se, 0.05);
   }
   // Between the openings both modes carry weight; plain MC cannot pass the wall there.
   const auto both = estimate_log_psi_implicit(problem, Vec<1>(1.9), 0, 1000, {32});
@@ -326,10 +332,6 @@ TEST(PathIntegral, HardWallControlMatchesTheDoubleSlit) {
   const auto behind = estimate_log_psi_implicit(problem, Vec<1>(0.0), 51, 5, {1});
   EXPECT_TRUE(std::isfinite(behind.log_psi));
   EXPECT_TRUE(behind.modes.empty());
-  // The random map is refused with walls ahead (the mixture needs a proposal density).
-  EXPECT_THROW(
-      estimate_log_psi_implicit(problem, Vec<1>(1.0), 0, 5, {1}, {}, {}, SamplingMap::kRandom),
-      implicit::InvalidArgument);
 }
 
 TEST(PathIntegral, HardWallBadInput) {
@@ -405,10 +407,65 @@ TEST(PathIntegral, TwoWallsInThePlaneAgreeWithPlainMonteCarlo) {
   ASSERT_LT(mc.wall_hits, 400000);
   EXPECT_NEAR(e.log_psi, mc.log_psi, 4.5 * std::hypot(e.relative_se, mc.relative_se))
       << "SE implicit " << e.relative_se << ", MC " << mc.relative_se;
+  const auto r =
+      estimate_log_psi_implicit(problem, x, 0, 20000, {44}, {}, {}, SamplingMap::kRandom);
+  EXPECT_EQ(r.map_failures, 0);
+  EXPECT_NEAR(r.log_psi, mc.log_psi, 4.5 * std::hypot(r.relative_se, mc.relative_se))
+      << "SE random map " << r.relative_se << ", MC " << mc.relative_se;
   // The same key gives the same estimate (common random numbers for the control).
   const auto again = estimate_log_psi_implicit(problem, x, 0, 20000, {41});
   EXPECT_EQ(again.log_psi, e.log_psi);
   const auto c = estimate_control(problem, x, 0, {.samples = 200}, {43});
   EXPECT_TRUE(c.defined);
   EXPECT_TRUE(c.u.allFinite());
+}
+
+namespace {
+// A planar robot pushed by wind along +x past a Gaussian bump at (1, 0) (non-convex F).
+struct BumpRobot {
+  template <typename T>
+  Eigen::Matrix<T, 2, 1> drift(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    Eigen::Matrix<T, 2, 1> w;
+    w << x(0) * 0.0 + 0.3, x(1) * 0.0;
+    return w;
+  }
+  template <typename T>
+  T running_cost(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    using std::exp;
+    const T dx = x(0) - 1.0, dy = x(1);
+    return 20.0 * exp(-(dx * dx + dy * dy) / (2.0 * 0.09));
+  }
+  template <typename T>
+  T final_cost(const Eigen::Matrix<T, 2, 1>& x) const {
+    const T dx = x(0) - 2.0, dy = x(1);
+    return 5.0 * (dx * dx + dy * dy);
+  }
+};
+}  // namespace
+
+TEST(PathIntegral, HardWallModesPassAnObstacleOnTheirOwnSide) {
+  // A gate at t = 0.5 with openings below and above the bump's axis. Clamping only the gate
+  // point of the free minimiser (which passes above) leaves the lower mode's path going back
+  // over the bump (a local minimum, F = 51.0 instead of 32.9); the translated start fixes it.
+  // Mirror symmetry is the oracle: mode "below" from y0 = 0.05 equals mode "above" from -0.05.
+  ControlSpec<2, 2> s;
+  s.G.setIdentity();
+  s.noise_covariance = 0.05 * Mat<2>::Identity();
+  s.control_cost = 2.0 * Mat<2>::Identity();
+  s.horizon = 2.0;
+  s.dt = 0.05;
+  ControlProblem problem(
+      BumpRobot{}, s,
+      {HardWall<2>{
+          .time = 0.5, .direction = Vec<2>(0, 1), .openings = {{-0.6, -0.3}, {0.3, 0.6}}}});
+  const auto up = estimate_log_psi_implicit(problem, Vec<2>(0.0, 0.05), 0, 10, {1});
+  const auto down = estimate_log_psi_implicit(problem, Vec<2>(0.0, -0.05), 0, 10, {1});
+  ASSERT_EQ(up.modes.size(), 2u);
+  for (int m = 0; m < 2; ++m) {
+    EXPECT_EQ(up.modes[m].status, implicit::MinimizeStatus::kConverged);
+    EXPECT_NEAR(up.modes[m].phi, down.modes[1 - m].phi, 1e-6 * up.modes[m].phi);
+    // At t = 1 (block 20, x about 1) the path is on its opening's side of the bump.
+    const double y_at_bump = up.modes[m].minimizer(2 * 19 + 1);
+    EXPECT_LT(m == 0 ? y_at_bump : -y_at_bump, -0.3) << "mode " << m;
+  }
 }

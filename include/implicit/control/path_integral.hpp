@@ -17,17 +17,19 @@
 //
 // The model is one type with three members templated on the scalar (for automatic derivatives):
 //
+// clang-format off
 //   struct Model {
-//     template <typename T> Eigen::Matrix<T, D, 1> drift(const Eigen::Matrix<T, D, 1>& x, double t)
-//     const; template <typename T> T running_cost(const Eigen::Matrix<T, D, 1>& x, double t) const;
-//     // V template <typename T> T final_cost(const Eigen::Matrix<T, D, 1>& x) const; // Phi
+//     template <typename T> Eigen::Matrix<T, D, 1> drift(const Eigen::Matrix<T, D, 1>& x, double t) const;
+//     template <typename T> T running_cost(const Eigen::Matrix<T, D, 1>& x, double t) const;  // V
+//     template <typename T> T final_cost(const Eigen::Matrix<T, D, 1>& x) const;              // Phi
 //   };
 //   ControlSpec<1, 1> spec;  spec.G << 1;  spec.noise_covariance << 1;  spec.control_cost << 0.1;
 //   ControlProblem problem(Model{}, spec);          // checks condition (8), finds gamma = 0.1
 //   auto c = estimate_control(problem, x, 0, {.samples = 50}, {.seed = 1});   // c.u, c.psi.ess
 //   // A wall at t = 1 with openings (-6, -4) and (6, 8) (the double slit):
-//   ControlProblem walled(Model{}, spec, {HardWall<1>{.time = 1.0, .openings = {{-6, -4}, {6,
-//   8}}}});
+//   HardWall<1> wall{.time = 1.0, .openings = {{-6, -4}, {6, 8}}};
+//   ControlProblem walled(Model{}, spec, {wall});   // c.psi.modes: one per opening
+// clang-format on
 //
 // Common mistakes: R and Q Q^T that violate condition (8) (the constructor names the entry that
 // does not match); noise acting on a subspace only (Sigma singular: integrate over the noisy
@@ -35,7 +37,8 @@
 // zeroes weights, and with several openings the samples of one Laplace approximation rarely
 // reach the other openings. Describe it as a HardWall instead: the estimator then finds one
 // constrained minimum per opening and samples a mixture (spec §2.4.3). The random map needs F to
-// increase along every ray from its minimiser ("star-shaped"); with walls use the linear map.
+// increase along every ray from its minimiser ("star-shaped", e.g. convex F); with walls it runs
+// inside each mode's openings, which is exact for a convex F.
 
 #include <algorithm>
 #include <cmath>
@@ -547,6 +550,21 @@ BandedMinimizeResult<PathF::Block> minimize_with_equalities(
 
 enum class RayOutcome { kOk, kWall, kFailed };
 
+/// F along a ray, +inf where `inside(lambda)` is false (one mode's openings).
+template <typename PathF, typename Inside>
+struct RestrictedPath {
+  const PathF& f;
+  Inside inside;
+  double evaluate_along(const Eigen::VectorXd& base, const Eigen::VectorXd& dir, double lambda,
+                        double* slope) const {
+    if (!inside(lambda)) {
+      if (slope) *slope = 0.0;
+      return std::numeric_limits<double>::infinity();
+    }
+    return f.evaluate_along(base, dir, lambda, slope);
+  }
+};
+
 /// The random map's scalar equation F(mu + lambda d) = target along one ray (spec §1.3): bracket
 /// [0, hi] with hi doubled from sqrt(rho), then Newton safeguarded by bisection, to 1e-12
 /// relative. kWall: F jumps to +inf before reaching the level (no root: the sample has zero
@@ -597,8 +615,10 @@ RayOutcome solve_ray(const PathF& f, const Eigen::VectorXd& mu, const Eigen::Vec
 /// with its constrained minimum (see constrained_modes), a Gaussian mixture over them weighted
 /// by their Laplace masses, component choice from stream (..., kMixture), weights
 /// exp(-F) / q with the true F (0 at a wall). `frozen` (from an estimate at a nearby x) keeps
-/// that estimate's modes: their wall values a^T y_w and mixture weights. Walls need the linear
-/// map (the mixture needs its proposal density; the random map has none in closed form).
+/// that estimate's modes: their wall values a^T y_w and mixture weights. With the random map
+/// and walls, a sample chooses mode c with probability pi_c and runs the random map of F
+/// restricted to c's openings; its weight is divided by pi_c (the random map has no proposal
+/// density in closed form, so the modes cannot share samples as the linear mixture does).
 template <typename Problem>
 PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem::kStateDim>& x,
                                       int k, int M, const StreamKey& key,
@@ -674,10 +694,6 @@ PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem:
     return out;
   }
 
-  require(map == SamplingMap::kLinear,
-          "path integral estimator: expected the linear map with hard walls (the mixture over "
-          "openings needs the proposal density, which the random map does not have), got the "
-          "random map");
   const auto& walls = problem.walls();
   const int A = static_cast<int>(ahead.size());
   std::vector<WallMode> modes;
@@ -743,46 +759,88 @@ PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem:
       // minimiser is outside it); with several walls or a non-convex F this is a safeguarded
       // heuristic, capped at 2 A + 2 rounds. An inexact centre costs efficiency only: the
       // weights use the true F, so the estimator stays unbiased for any centre.
-      Eigen::VectorXd at = free_min;
-      for (int round = 0; round < 2 * A + 2; ++round) {
-        cons.clear();
-        for (int i = 0; i < A; ++i) {
-          if (md.clamped[static_cast<std::size_t>(i)] == 0) continue;
-          const auto& op =
-              walls[static_cast<std::size_t>(ahead[i])]
-                  .openings[static_cast<std::size_t>(md.openings[static_cast<std::size_t>(i)])];
-          cons.push_back({block_of(i), walls[static_cast<std::size_t>(ahead[i])].direction,
-                          md.clamped[static_cast<std::size_t>(i)] < 0 ? op.lower : op.upper});
-        }
-        r = detail::minimize_with_equalities(F, at, cons, options, nu);
-        if (r.status == MinimizeStatus::kNonFinite) break;
-        at = r.x;
-        bool changed = false;
-        for (int i = 0; i < A; ++i) {
-          if (md.clamped[static_cast<std::size_t>(i)] != 0) continue;
-          const auto& op =
-              walls[static_cast<std::size_t>(ahead[i])]
-                  .openings[static_cast<std::size_t>(md.openings[static_cast<std::size_t>(i)])];
-          const double v = wall_value(i, at);
-          if (v <= op.lower || v >= op.upper) {
-            md.clamped[static_cast<std::size_t>(i)] = v <= op.lower ? -1 : 1;
-            changed = true;
-          }
-        }
-        if (!changed) {
-          // KKT: held at the upper edge needs nu >= 0, at the lower edge nu <= 0.
-          int j = 0;
+      // Two starts: the free minimiser, and the free minimiser translated along each wall's
+      // direction so that it passes through the mode's openings (the shift ramps up linearly
+      // from the previous wall and is kept after the wall). For a non-convex F (an obstacle to
+      // pass on either side) clamping only the wall point can leave the rest of the path on the
+      // wrong side, a poor local minimum; the lower constrained F wins.
+      auto search = [&](const Eigen::VectorXd& from, std::vector<int>& clamped) {
+        BandedMinimizeResult<D> r;
+        Eigen::VectorXd at = from;
+        for (int round = 0; round < 2 * A + 2; ++round) {
+          cons.clear();
           for (int i = 0; i < A; ++i) {
-            int& side = md.clamped[static_cast<std::size_t>(i)];
-            if (side == 0) continue;
-            if (side * nu(j) < 0.0) {
-              side = 0;
+            if (clamped[static_cast<std::size_t>(i)] == 0) continue;
+            const auto& op =
+                walls[static_cast<std::size_t>(ahead[i])]
+                    .openings[static_cast<std::size_t>(md.openings[static_cast<std::size_t>(i)])];
+            cons.push_back({block_of(i), walls[static_cast<std::size_t>(ahead[i])].direction,
+                            clamped[static_cast<std::size_t>(i)] < 0 ? op.lower : op.upper});
+          }
+          r = detail::minimize_with_equalities(F, at, cons, options, nu);
+          if (r.status == MinimizeStatus::kNonFinite) break;
+          at = r.x;
+          bool changed = false;
+          for (int i = 0; i < A; ++i) {
+            if (clamped[static_cast<std::size_t>(i)] != 0) continue;
+            const auto& op =
+                walls[static_cast<std::size_t>(ahead[i])]
+                    .openings[static_cast<std::size_t>(md.openings[static_cast<std::size_t>(i)])];
+            const double v = wall_value(i, at);
+            if (v <= op.lower || v >= op.upper) {
+              clamped[static_cast<std::size_t>(i)] = v <= op.lower ? -1 : 1;
               changed = true;
             }
-            ++j;
           }
+          if (!changed) {
+            // KKT: held at the upper edge needs nu >= 0, at the lower edge nu <= 0.
+            int j = 0;
+            for (int i = 0; i < A; ++i) {
+              int& side = clamped[static_cast<std::size_t>(i)];
+              if (side == 0) continue;
+              if (side * nu(j) < 0.0) {
+                side = 0;
+                changed = true;
+              }
+              ++j;
+            }
+          }
+          if (!changed) break;
         }
-        if (!changed) break;
+        return r;
+      };
+      std::vector<int> clamped_free = md.clamped, clamped_start = md.clamped;
+      r = search(free_min, clamped_free);
+      md.clamped = clamped_free;
+      Eigen::VectorXd shifted = free_min;
+      std::vector<int> order(static_cast<std::size_t>(A));
+      for (int i = 0; i < A; ++i) order[static_cast<std::size_t>(i)] = i;
+      std::sort(order.begin(), order.end(),
+                [&](int p, int q) { return block_of(p) < block_of(q); });
+      int previous = -1;
+      for (int i : order) {
+        const auto& wall = walls[static_cast<std::size_t>(ahead[i])];
+        const auto& op =
+            wall.openings[static_cast<std::size_t>(md.openings[static_cast<std::size_t>(i)])];
+        const double v = wall_value(i, shifted);
+        const double target = std::clamp(v, op.lower, op.upper);
+        const int w = block_of(i);
+        if (target != v && w > previous) {
+          const Vec<D> delta = (target - v) / wall.direction.squaredNorm() * wall.direction;
+          for (int b = previous + 1; b < n; ++b)
+            shifted.template segment<D>(b * D) +=
+                std::min(1.0, static_cast<double>(b - previous) / (w - previous)) * delta;
+        }
+        previous = std::max(previous, w);
+      }
+      if ((shifted - free_min).cwiseAbs().maxCoeff() > 0.0) {
+        auto other = search(shifted, clamped_start);
+        const bool other_ok = other.status != MinimizeStatus::kNonFinite && other.factor.ok();
+        const bool r_ok = r.status != MinimizeStatus::kNonFinite && r.factor.ok();
+        if (other_ok && (!r_ok || other.value < r.value)) {
+          r = std::move(other);
+          md.clamped = clamped_start;
+        }
       }
     }
     md.status = r.status;
@@ -820,18 +878,64 @@ PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem:
   }
   Rng pick({key.seed, key.step, key.index, purpose::kMixture});
   const double log_norm = problem.log_normalizer(n) - 0.5 * N * kLog2Pi;
-  Eigen::VectorXd diff(N);
+  Eigen::VectorXd diff(N), d(N);
+  int failures = 0;
+  std::vector<double> a_mu(static_cast<std::size_t>(A)), a_d(static_cast<std::size_t>(A));
   for (int j = 0; j < M; ++j) {
     const double u = pick.uniform() * acc;
     std::size_t c = 0;
     while (c + 1 < modes.size() && !(u < cumulative[c])) ++c;
     while (!std::isfinite(log_pi[c]) && c > 0) --c;  // never choose a weight-0 component
     rng.fill_normal(xi);
+    ++modes[c].samples;
+    double& l = lw[static_cast<std::size_t>(j)];
+    if (map == SamplingMap::kRandom) {
+      // Random map inside mode c only: F restricted to the paths through c's openings (+inf
+      // elsewhere), integrated along rays from mu_c. That region is convex and mu_c is the
+      // constrained minimum, so for a convex F every ray sees F - phi_c increase: the map is
+      // one-to-one onto the region. psi = sum_c Z_c, and choosing c with probability pi_c
+      // makes w / pi_c unbiased for it.
+      const double rho = xi.squaredNorm();
+      d = xi / std::sqrt(rho);
+      factors[c].upper_solve_in_place(d);
+      const WallMode& md = modes[c];
+      for (int i = 0; i < A; ++i) {
+        const auto& a = walls[static_cast<std::size_t>(ahead[i])].direction;
+        a_mu[static_cast<std::size_t>(i)] =
+            a.dot(md.minimizer.template segment<D>(block_of(i) * D));
+        a_d[static_cast<std::size_t>(i)] = a.dot(d.template segment<D>(block_of(i) * D));
+      }
+      auto inside = [&](double lambda) {
+        for (int i = 0; i < A; ++i) {
+          const auto& op =
+              walls[static_cast<std::size_t>(ahead[i])]
+                  .openings[static_cast<std::size_t>(md.openings[static_cast<std::size_t>(i)])];
+          if (!op.contains(a_mu[static_cast<std::size_t>(i)] +
+                           lambda * a_d[static_cast<std::size_t>(i)]))
+            return false;
+        }
+        return true;
+      };
+      const detail::RestrictedPath restricted{F, inside};
+      double lambda = 0.0, slope = 0.0;
+      const auto ray =
+          detail::solve_ray(restricted, md.minimizer, d, md.phi + 0.5 * rho, rho, lambda, slope);
+      if (ray != detail::RayOutcome::kOk) {
+        if (ray == detail::RayOutcome::kWall)
+          ++modes[c].wall_hits;
+        else
+          ++failures;
+        l = kNegInf;
+        continue;
+      }
+      l = 0.5 * N * kLog2Pi - md.phi - log_det[c] + (1.0 - 0.5 * N) * std::log(rho) +
+          (N - 1.0) * std::log(lambda) - std::log(std::abs(slope)) - log_pi[c] -
+          problem.log_normalizer(n);
+      continue;
+    }
     y = xi;
     factors[c].upper_solve_in_place(y);
     y += modes[c].minimizer;
-    ++modes[c].samples;
-    double& l = lw[static_cast<std::size_t>(j)];
     const double fy = problem.passes_walls(x, k, y) ? F.evaluate(y, nullptr, nullptr)
                                                     : std::numeric_limits<double>::infinity();
     if (!std::isfinite(fy)) {
@@ -860,6 +964,8 @@ PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem:
     l = -fy - (top + std::log(sum)) - log_norm;
   }
   PsiEstimate result = detail::summarize(lw);
+  result.map_failures = failures;
+  result.wall_hits -= failures;
   result.status = out.status;
   result.modes = std::move(modes);
   const auto best = std::max_element(
