@@ -347,6 +347,10 @@ void slit_section(Document& doc, const json& results) {
       "centred at a constrained minimum on a slit edge hit the wall about half of the time "
       "(E32). The paper's estimator aims at the slit edge, so its controlled trajectories "
       "crash more often (≈ 0.49) than the exact ones (0.25).",
+      "The crash fraction of one 500-run table has a standard error of ≈ 0.022 (values from "
+      "0.41 to 0.48 across seeds). Over 20 000 runs the paper-mode fraction at M = 50 is "
+      "0.447 ± 0.004, which an independent re-implementation confirms; the reference's ≈ 0.49 "
+      "is a 500-run estimate of the same quantity.",
   });
   settings_list(doc, results, "slit");
 }
