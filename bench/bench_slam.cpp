@@ -77,8 +77,8 @@ BENCHMARK(BM_Step)
 
 // Per-step cost against the map size N: every particle starts with the N landmarks of a dense
 // field and runs along the route. With known association (assoc = 0) the per-particle map work
-// is O(log N); with maximum-likelihood association (assoc = 1) each particle also searches its
-// map for the detected landmark, through the spatial grid index once the map is large.
+// is O(log N); with maximum-likelihood association each particle also searches its map for the
+// detected landmark: through the spatial grid index (assoc = 1) or the linear scan (assoc = 2).
 void BM_StepVsLandmarks(benchmark::State& state) {
   const ThreadLimit one(1);
   const int landmarks = static_cast<int>(state.range(1));
@@ -87,6 +87,7 @@ void BM_StepVsLandmarks(benchmark::State& state) {
   SlamOptions opt;
   opt.method = method_of(static_cast<int>(state.range(0)));
   opt.association = state.range(2) == 0 ? Association::kKnown : Association::kMaximumLikelihood;
+  opt.association_index = state.range(2) != 2;  // 2: ML through the linear scan
   opt.particles = 100;
   auto make = [&] {
     auto f = make_slam_filter(opt, d.initial_pose);
@@ -105,13 +106,14 @@ void BM_StepVsLandmarks(benchmark::State& state) {
     filter->step(n, d.control(n), d.observations(n));
     ++n;
   }
-  state.SetLabel(fmt::format("{} {}", to_string(opt.method), to_string(opt.association)));
+  state.SetLabel(fmt::format("{} {}{}", to_string(opt.method), to_string(opt.association),
+                             state.range(2) == 2 ? " scan" : ""));
   state.counters["landmarks"] = landmarks;
   state.counters["map_bytes_per_particle"] =
       static_cast<double>(filter->map_bytes()) / opt.particles;
 }
 BENCHMARK(BM_StepVsLandmarks)
-    ->ArgsProduct({{2, 4}, {15, 100, 1000, 10000}, {0, 1}})
+    ->ArgsProduct({{2, 4}, {15, 100, 1000, 10000}, {0, 1, 2}})
     ->ArgNames({"method", "N", "assoc"})
     ->Unit(benchmark::kMicrosecond);
 
@@ -128,7 +130,7 @@ void BM_AssociationVsLandmarks(benchmark::State& state) {
   for (std::size_t k = 0; k < n; ++k) {
     const Vec<2> m(side * rng.uniform(), side * rng.uniform());
     map.push_back({m, 0.05 * Mat<2>::Identity()});
-    index.insert(static_cast<std::uint32_t>(k), m);
+    index.insert(static_cast<std::uint32_t>(k), m, 0.1);
   }
   const robot::RangeBearingSensor sensor;
   const robot::UteModel model{robot::UteParams{}};
@@ -147,7 +149,7 @@ void BM_AssociationVsLandmarks(benchmark::State& state) {
   std::vector<std::uint32_t> scratch;
   std::size_t q = 0, matched = 0;
   for (auto _ : state) {
-    const auto a = indexed ? associate_indexed(map, index, 0.1, sensor, poses[q], sigma1, zs[q],
+    const auto a = indexed ? associate_indexed(map, index, sensor, poses[q], sigma1, zs[q],
                                                robot::kChiSquare2Dof99, scratch)
                            : associate_scan(map, sensor, poses[q], sigma1, zs[q],
                                             robot::kChiSquare2Dof99, 0.1);

@@ -18,57 +18,77 @@ LandmarkGridIndex::LandmarkGridIndex(double cell_size) : cell_size_(cell_size) {
           "landmark grid index: expected a positive cell size, got {}", cell_size);
 }
 
-std::int64_t LandmarkGridIndex::cell_coordinate(double v) const {
+int LandmarkGridIndex::covariance_class(double cov_trace) {
+  if (!(cov_trace > kClassTrace0)) return 0;  // also NaN: such a landmark never passes the gate
+  const int c = static_cast<int>(std::ceil(std::log(cov_trace / kClassTrace0) / std::log(4.0)));
+  // Round-off at a class boundary: make sure trace <= class_trace(c).
+  int k = std::clamp(c, 0, kMaxClass);
+  while (k < kMaxClass && cov_trace > class_trace(k)) ++k;
+  return k;
+}
+
+double LandmarkGridIndex::class_trace(int c) { return kClassTrace0 * std::pow(4.0, c); }
+
+std::int64_t LandmarkGridIndex::cell_coordinate(int c, double v) const {
   // Clamped so that far-away (or huge) coordinates cannot overflow the key.
-  const double c = std::floor(v / cell_size_);
-  return static_cast<std::int64_t>(std::clamp(c, -1e9, 1e9));
+  const double cell = std::ldexp(cell_size_, c);
+  return static_cast<std::int64_t>(std::clamp(std::floor(v / cell), -1e9, 1e9));
 }
 
-std::uint64_t LandmarkGridIndex::key(std::int64_t cx, std::int64_t cy) {
-  return (static_cast<std::uint64_t>(cx) << 32) ^ (static_cast<std::uint64_t>(cy) & 0xffffffffu);
+std::uint64_t LandmarkGridIndex::key(int c, std::int64_t cx, std::int64_t cy) {
+  // 5 bits of class, 29 bits per coordinate (cells of >= 4 m: +-1e9 m); collisions of far
+  // coordinates only add candidates, which the exact scoring removes.
+  return (static_cast<std::uint64_t>(c) << 58) ^
+         ((static_cast<std::uint64_t>(cx) & 0x1fffffffu) << 29) ^
+         (static_cast<std::uint64_t>(cy) & 0x1fffffffu);
 }
 
-void LandmarkGridIndex::insert(std::uint32_t slot, const Vec<2>& position) {
+void LandmarkGridIndex::insert(std::uint32_t slot, const Vec<2>& position, double cov_trace) {
   if (!position.allFinite()) return;
-  auto& list = cells_[key(cell_coordinate(position(0)), cell_coordinate(position(1)))];
+  const int c = covariance_class(cov_trace);
+  auto& list = cells_[key(c, cell_coordinate(c, position(0)), cell_coordinate(c, position(1)))];
   if (std::find(list.begin(), list.end(), slot) != list.end()) return;
   list.push_back(slot);
   ++entries_;
+  class_used_[c] = true;
+  max_class_ = std::max(max_class_, c);
 }
 
-bool LandmarkGridIndex::same_cell(const Vec<2>& a, const Vec<2>& b) const {
-  return cell_coordinate(a(0)) == cell_coordinate(b(0)) &&
-         cell_coordinate(a(1)) == cell_coordinate(b(1));
+bool LandmarkGridIndex::same_bucket(const Vec<2>& a, double trace_a, const Vec<2>& b,
+                                    double trace_b) const {
+  const int c = covariance_class(trace_a);
+  return c == covariance_class(trace_b) && cell_coordinate(c, a(0)) == cell_coordinate(c, b(0)) &&
+         cell_coordinate(c, a(1)) == cell_coordinate(c, b(1));
 }
 
-double LandmarkGridIndex::cells_covering(const Vec<2>& center, double radius) const {
+double LandmarkGridIndex::cells_covering(int c, const Vec<2>& center, double radius) const {
   if (!std::isfinite(radius) || !center.allFinite()) return std::numeric_limits<double>::infinity();
-  const double nx = std::floor((center(0) + radius) / cell_size_) -
-                    std::floor((center(0) - radius) / cell_size_) + 1.0;
-  const double ny = std::floor((center(1) + radius) / cell_size_) -
-                    std::floor((center(1) - radius) / cell_size_) + 1.0;
+  const double cell = std::ldexp(cell_size_, c);
+  const double nx =
+      std::floor((center(0) + radius) / cell) - std::floor((center(0) - radius) / cell) + 1.0;
+  const double ny =
+      std::floor((center(1) + radius) / cell) - std::floor((center(1) - radius) / cell) + 1.0;
   return nx * ny;
 }
 
-void LandmarkGridIndex::query(const Vec<2>& center, double radius,
+void LandmarkGridIndex::query(int c, const Vec<2>& center, double radius,
                               std::vector<std::uint32_t>& out) const {
-  out.clear();
-  const std::int64_t x0 = cell_coordinate(center(0) - radius);
-  const std::int64_t x1 = cell_coordinate(center(0) + radius);
-  const std::int64_t y0 = cell_coordinate(center(1) - radius);
-  const std::int64_t y1 = cell_coordinate(center(1) + radius);
+  const std::int64_t x0 = cell_coordinate(c, center(0) - radius);
+  const std::int64_t x1 = cell_coordinate(c, center(0) + radius);
+  const std::int64_t y0 = cell_coordinate(c, center(1) - radius);
+  const std::int64_t y1 = cell_coordinate(c, center(1) + radius);
   for (std::int64_t cx = x0; cx <= x1; ++cx)
     for (std::int64_t cy = y0; cy <= y1; ++cy) {
-      const auto it = cells_.find(key(cx, cy));
+      const auto it = cells_.find(key(c, cx, cy));
       if (it != cells_.end()) out.insert(out.end(), it->second.begin(), it->second.end());
     }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
 void LandmarkGridIndex::clear() {
   cells_.clear();
   entries_ = 0;
+  max_class_ = -1;
+  std::fill(std::begin(class_used_), std::end(class_used_), false);
 }
 
 // Why the disc is conservative. For a landmark m with covariance P (trace P <= tau), seen from f
@@ -157,21 +177,31 @@ robot::Association associate_scan(const LandmarkMap& map, const RangeBearingSens
 }
 
 robot::Association associate_indexed(const LandmarkMap& map, const LandmarkGridIndex& index,
-                                     double cov_trace_bound, const RangeBearingSensor& sensor,
-                                     const Pose& f, const Mat<3>& sigma1, const Measurement& z,
-                                     double gate, std::vector<std::uint32_t>& scratch) {
-  const SearchDisc disc = association_search_disc(sensor, f, sigma1, z, cov_trace_bound, gate);
-  const auto n = static_cast<double>(map.size());
-  if (index.cells_covering(disc.center, disc.radius) > std::max(16.0, n)) {
-    return robot::associate_max_likelihood(
-        static_cast<int>(map.size()),
-        [&](int k, Measurement& e, Mat2& sk) {
-          return score_landmark(sensor, f, sigma1, z, map.get(static_cast<std::size_t>(k)),
-                                disc.range_margin, e, sk);
-        },
-        gate);
+                                     const RangeBearingSensor& sensor, const Pose& f,
+                                     const Mat<3>& sigma1, const Measurement& z, double gate,
+                                     std::vector<std::uint32_t>& scratch) {
+  const int top = index.max_class();
+  if (top < 0) return {};  // nothing registered: no landmark anywhere
+  // The range check uses the margin of the widest class: conservative for every candidate.
+  const double margin =
+      association_search_disc(sensor, f, sigma1, z, LandmarkGridIndex::class_trace(top), gate)
+          .range_margin;
+  // Per class, its own (smaller) disc; fall back to the scan when the discs cover too many cells.
+  double cells = 0.0;
+  SearchDisc discs[LandmarkGridIndex::kMaxClass + 1];
+  for (int c = 0; c <= top; ++c) {
+    if (!index.has_class(c)) continue;
+    discs[c] =
+        association_search_disc(sensor, f, sigma1, z, LandmarkGridIndex::class_trace(c), gate);
+    cells += index.cells_covering(c, discs[c].center, discs[c].radius);
   }
-  index.query(disc.center, disc.radius, scratch);
+  if (!(cells <= std::max(16.0, static_cast<double>(map.size()))))
+    return associate_scan(map, sensor, f, sigma1, z, gate, LandmarkGridIndex::class_trace(top));
+  scratch.clear();
+  for (int c = 0; c <= top; ++c)
+    if (index.has_class(c)) index.query(c, discs[c].center, discs[c].radius, scratch);
+  std::sort(scratch.begin(), scratch.end());
+  scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
   // Slots of other particles' landmarks beyond this map's size are skipped; the rest are
   // scored in slot order.
   const auto end = std::lower_bound(scratch.begin(), scratch.end(), map.size());
@@ -179,7 +209,7 @@ robot::Association associate_indexed(const LandmarkMap& map, const LandmarkGridI
       static_cast<int>(end - scratch.begin()),
       [&](int i, Measurement& e, Mat2& sk) {
         return score_landmark(sensor, f, sigma1, z, map.get(scratch[static_cast<std::size_t>(i)]),
-                              disc.range_margin, e, sk);
+                              margin, e, sk);
       },
       gate);
   if (a.matched()) a.index = static_cast<int>(scratch[static_cast<std::size_t>(a.index)]);

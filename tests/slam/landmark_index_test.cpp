@@ -11,6 +11,7 @@
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/evaluate.hpp"
 #include "implicit/slam/landmark_index.hpp"
+#include "implicit/slam/slam_filter.hpp"
 
 namespace implicit::slam {
 namespace {
@@ -56,7 +57,7 @@ Case make_case(std::uint64_t k) {
     if (v > 0.9) m(0) = cell * std::round(m(0) / cell) + (rng.uniform() < 0.5 ? -1e-12 : 1e-12);
     const LandmarkEstimate l{m, random_cov(rng, max_trace)};
     c.map.push_back(l);
-    c.index.insert(static_cast<std::uint32_t>(i), m);
+    c.index.insert(static_cast<std::uint32_t>(i), m, l.cov.trace());
     c.trace_bound = std::max(c.trace_bound, l.cov.trace());
   }
   const RangeBearingSensor s;
@@ -79,8 +80,7 @@ TEST(LandmarkIndex, IndexedAssociationEqualsLinearScanOnRandomCases) {
     const double gate = k % 2 ? 9.21 : 30.0;
     std::vector<std::uint32_t> scratch;
     const auto scan = associate_scan(c.map, s, c.f, c.sigma1, c.z, gate);
-    const auto idx =
-        associate_indexed(c.map, c.index, c.trace_bound, s, c.f, c.sigma1, c.z, gate, scratch);
+    const auto idx = associate_indexed(c.map, c.index, s, c.f, c.sigma1, c.z, gate, scratch);
     ASSERT_EQ(scan.index, idx.index) << "case " << k;
     if (scan.matched()) {
       ASSERT_EQ(scan.mahalanobis2, idx.mahalanobis2) << "case " << k;
@@ -135,16 +135,26 @@ TEST(LandmarkIndex, MovedLandmarksAndSharedSlotsStayFindable) {
   LandmarkMap a;
   for (int i = 0; i < 40; ++i) {
     const Vec<2> m(2.0 * i, i % 2 ? 5.0 : -5.0);
-    a.push_back({m, 0.01 * Mat<2>::Identity()});
-    index.insert(static_cast<std::uint32_t>(i), m);
+    // Landmark 20 starts wide (covariance class 3), the others narrow (class 0).
+    const Mat<2> cov = (i == 20 ? 3.0 : 0.01) * Mat<2>::Identity();
+    a.push_back({m, cov});
+    index.insert(static_cast<std::uint32_t>(i), m, cov.trace());
   }
+  EXPECT_EQ(index.max_class(), 3);
   LandmarkMap b = a;
   LandmarkEstimate moved = b.get(10);
   moved.mean += Vec<2>(0.0, 9.0);  // from y = -5 to y = 4: another cell
   b.set(10, moved);
-  index.insert(10, moved.mean);
+  index.insert(10, moved.mean, moved.cov.trace());
+  LandmarkEstimate shrunk = b.get(20);  // an update: class 3 -> class 0, a small move
+  shrunk.mean += Vec<2>(0.3, 0.2);
+  shrunk.cov = 0.01 * Mat<2>::Identity();
+  EXPECT_FALSE(
+      index.same_bucket(shrunk.mean, shrunk.cov.trace(), b.get(20).mean, b.get(20).cov.trace()));
+  b.set(20, shrunk);
+  index.insert(20, shrunk.mean, shrunk.cov.trace());
   a.push_back({Vec<2>(30.0, 30.0), 0.01 * Mat<2>::Identity()});
-  index.insert(40, Vec<2>(30.0, 30.0));
+  index.insert(40, Vec<2>(30.0, 30.0), 0.02);
   EXPECT_EQ(a.get(10).mean, Vec<2>(20.0, -5.0));  // the other particle is untouched
   const Mat<3> sigma1 = 1e-4 * Mat<3>::Identity();
   std::vector<std::uint32_t> scratch;
@@ -154,12 +164,12 @@ TEST(LandmarkIndex, MovedLandmarksAndSharedSlotsStayFindable) {
         const Pose f(x, 0.0, kPi / 2);
         const Measurement z(5.5, bearing);
         const auto scan = associate_scan(*map, s, f, sigma1, z, 9.21);
-        const auto idx = associate_indexed(*map, index, 0.02, s, f, sigma1, z, 9.21, scratch);
+        const auto idx = associate_indexed(*map, index, s, f, sigma1, z, 9.21, scratch);
         ASSERT_EQ(scan.index, idx.index) << x << " " << bearing;
       }
   // The moved landmark is found where particle b has it, and not where it was.
   const auto hit =
-      associate_indexed(b, index, 0.02, s, Pose(20.0, 0.0, kPi / 2), 1e-4 * Mat<3>::Identity(),
+      associate_indexed(b, index, s, Pose(20.0, 0.0, kPi / 2), 1e-4 * Mat<3>::Identity(),
                         Measurement(4.0, kPi / 2), 9.21, scratch);
   EXPECT_EQ(hit.index, 10);
 }
@@ -168,11 +178,20 @@ TEST(LandmarkIndex, BadCellSizeAndNonFinitePositions) {
   EXPECT_THROW(LandmarkGridIndex(0.0), InvalidArgument);
   EXPECT_THROW(LandmarkGridIndex(-1.0), InvalidArgument);
   LandmarkGridIndex index;
-  index.insert(0, Vec<2>(std::nan(""), 1.0));
+  index.insert(0, Vec<2>(std::nan(""), 1.0), 0.0);
   EXPECT_EQ(index.entries(), 0u);
-  index.insert(1, Vec<2>(1.0, 1.0));
-  index.insert(1, Vec<2>(1.5, 1.5));  // same cell, same slot: registered once
+  EXPECT_EQ(index.max_class(), -1);
+  index.insert(1, Vec<2>(1.0, 1.0), 0.1);
+  index.insert(1, Vec<2>(1.5, 1.5), 0.2);  // same class and cell, same slot: registered once
   EXPECT_EQ(index.entries(), 1u);
+  // Covariance classes: trace <= 0.25 * 4^c, boundaries included in the lower class.
+  EXPECT_EQ(LandmarkGridIndex::covariance_class(0.0), 0);
+  EXPECT_EQ(LandmarkGridIndex::covariance_class(0.25), 0);
+  EXPECT_EQ(LandmarkGridIndex::covariance_class(0.2500001), 1);
+  EXPECT_EQ(LandmarkGridIndex::covariance_class(1.0), 1);
+  EXPECT_EQ(LandmarkGridIndex::covariance_class(5.0), 3);
+  for (double t : {0.3, 1.0, 3.9, 4.0, 4.1, 1e3})
+    EXPECT_LE(t, LandmarkGridIndex::class_trace(LandmarkGridIndex::covariance_class(t))) << t;
 }
 
 TEST(SlamMetrics, MapShapeIsZeroForARigidlyMovedMap) {
@@ -197,6 +216,42 @@ TEST(SlamMetrics, MapShapeIsZeroForARigidlyMovedMap) {
   EXPECT_LT(m.map_shape_m, 1e-12);
   EXPECT_GT(m.rmse_map_m, 1.0);
   EXPECT_NEAR(m.alignment_angle_rad, -0.2, 1e-12);
+}
+
+}  // namespace
+}  // namespace implicit::slam
+
+namespace implicit::slam {
+namespace {
+
+TEST(LandmarkIndex, FilterGivesTheSamePathWithIndexAndScan) {
+  // 2 000 known landmarks (above the map size where the filter switches to the index), ML
+  // association, 150 steps: the index must not change a single bit of the estimate.
+  const SlamScenario base = load_carpark_scenario(default_data_dir());
+  const SlamScenario sc = make_dense_scenario(base, 1, 2000, 3);
+  SlamDataset d = generate_synthetic(sc, SyntheticConfig(), 2);
+  for (SlamMethod m : {SlamMethod::kFastSlam2, SlamMethod::kImplicitRb}) {
+    std::vector<Pose> path[2];
+    std::size_t created[2] = {0, 0};
+    for (int idx = 0; idx < 2; ++idx) {
+      SlamOptions opt;
+      opt.method = m;
+      opt.association = Association::kMaximumLikelihood;
+      opt.association_index = idx == 1;
+      opt.particles = 20;
+      auto f = make_slam_filter(opt, d.initial_pose);
+      f->set_known_map(d.landmarks);
+      for (std::size_t n = 1; n <= 150; ++n) {
+        f->step(n, d.control(n), d.observations(n));
+        path[idx].push_back(f->pose().mean);
+      }
+      created[idx] = f->stats().new_landmarks;
+      EXPECT_GT(f->stats().updates, 100u);  // detections really were associated
+    }
+    EXPECT_EQ(created[0], created[1]);
+    for (std::size_t n = 0; n < path[0].size(); ++n)
+      ASSERT_EQ(path[0][n], path[1][n]) << to_string(m) << " step " << n;
+  }
 }
 
 }  // namespace

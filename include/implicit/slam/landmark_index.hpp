@@ -10,9 +10,9 @@
 // seen from f: association_search_radius() derives that disc from upper bounds on S (see the .cpp),
 // so only the landmarks registered in the grid cells that meet it need scoring.
 //
-//   LandmarkGridIndex index;                       // shared by all particles of a filter
-//   index.insert(slot, mean);                      // whenever any particle writes landmark `slot`
-//   auto a = associate_indexed(map, index, cov_trace_bound, sensor, f, sigma1, z, gate, scratch);
+//   LandmarkGridIndex index;                  // shared by all particles of a filter
+//   index.insert(slot, mean, cov.trace());    // whenever any particle writes landmark `slot`
+//   auto a = associate_indexed(map, index, sensor, f, sigma1, z, gate, scratch);
 //   // a == associate_scan(map, sensor, f, sigma1, z, gate), bit for bit, for every map
 //
 // Why one index for all particles: particles share landmark storage copy-on-write and mostly the
@@ -23,10 +23,14 @@
 // own landmark) removes the rest. Landmarks that move with EKF updates are registered again in
 // the new cell; stale entries only cost a look-up.
 //
+// Covariance classes: the disc grows with the landmark covariance, and a few far, rarely seen
+// landmarks (at 50 m range a new landmark has a lateral variance of 2 m^2) would inflate it for
+// all. So landmarks are bucketed by the trace of their covariance into classes c with
+// trace <= kClassTrace0 * 4^c, each class on its own grid with cells 2^c times larger; a query
+// visits every class with that class's disc, a few cells each.
+//
 // Mistakes to avoid: forgetting to insert after an EKF update moved a landmark into another cell
-// (the indexed association would then miss it), and using a cov_trace_bound below the trace of a
-// landmark covariance in the map (the search disc would be too small). The EKF update never
-// increases a covariance, so the largest trace at creation bounds it for good.
+// or covariance class (the indexed association would then miss it).
 
 #include <cstddef>
 #include <cstdint>
@@ -46,34 +50,46 @@ using robot::Pose;
 /// Uniform grid over the plane; each cell lists the landmark slots registered in it.
 class LandmarkGridIndex {
  public:
-  static constexpr double kDefaultCellSize = 4.0;  ///< [m], about the search radius at 8 m range
+  static constexpr double kDefaultCellSize = 4.0;  ///< [m] of class 0, about its search radius
+  static constexpr double kClassTrace0 = 0.25;     ///< [m^2] largest covariance trace of class 0
+  static constexpr int kMaxClass = 24;
 
   /// Throws InvalidArgument unless cell_size > 0 and finite.
   explicit LandmarkGridIndex(double cell_size = kDefaultCellSize);
 
   double cell_size() const { return cell_size_; }
-  /// Registers `slot` in the cell of `position` (no-op when already there). Non-finite positions
-  /// are ignored (such a landmark can never pass the gate).
-  void insert(std::uint32_t slot, const Vec<2>& position);
-  /// True when a and b fall into the same cell.
-  bool same_cell(const Vec<2>& a, const Vec<2>& b) const;
-  /// Number of cells meeting the bounding square of the disc (huge for huge radii).
-  double cells_covering(const Vec<2>& center, double radius) const;
-  /// Replaces `out` by the sorted, duplicate-free slots registered in the cells meeting the
-  /// bounding square of the disc (center, radius).
-  void query(const Vec<2>& center, double radius, std::vector<std::uint32_t>& out) const;
+  /// Covariance class of a landmark whose covariance has this trace.
+  static int covariance_class(double cov_trace);
+  /// Largest covariance trace of class c.
+  static double class_trace(int c);
+  /// Registers `slot` in the cell of `position` of the class of cov_trace (no-op when already
+  /// there). Non-finite positions are ignored (such a landmark can never pass the gate).
+  void insert(std::uint32_t slot, const Vec<2>& position, double cov_trace);
+  /// True when (a, trace_a) and (b, trace_b) fall into the same class and cell.
+  bool same_bucket(const Vec<2>& a, double trace_a, const Vec<2>& b, double trace_b) const;
+  /// Largest class holding an entry (-1 when empty).
+  int max_class() const { return max_class_; }
+  /// Whether class c holds an entry.
+  bool has_class(int c) const { return c >= 0 && c <= kMaxClass && class_used_[c]; }
+  /// Number of cells of class c meeting the bounding square of the disc (huge for huge radii).
+  double cells_covering(int c, const Vec<2>& center, double radius) const;
+  /// Appends the slots registered in the cells of class c meeting the bounding square of the
+  /// disc (center, radius); not sorted, may repeat.
+  void query(int c, const Vec<2>& center, double radius, std::vector<std::uint32_t>& out) const;
   /// Registered (cell, slot) entries.
   std::size_t entries() const { return entries_; }
   std::size_t cells() const { return cells_.size(); }
   void clear();
 
  private:
-  std::int64_t cell_coordinate(double v) const;
-  static std::uint64_t key(std::int64_t cx, std::int64_t cy);
+  std::int64_t cell_coordinate(int c, double v) const;
+  static std::uint64_t key(int c, std::int64_t cx, std::int64_t cy);
 
   double cell_size_;
   std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
   std::size_t entries_ = 0;
+  int max_class_ = -1;
+  bool class_used_[kMaxClass + 1] = {};
 };
 
 /// The disc that contains every landmark able to pass the gate.
@@ -97,10 +113,9 @@ robot::Association associate_scan(const LandmarkMap& map, const robot::RangeBear
                                   double gate, double cov_trace_bound = -1.0);
 
 /// The same association through the index: scores only the candidates the index returns (in
-/// slot order, so ties resolve as in the scan). Falls back to the scan when the disc covers more
+/// slot order, so ties resolve as in the scan). Falls back to the scan when the discs cover more
 /// cells than the map has landmarks. `scratch` avoids an allocation per call.
 robot::Association associate_indexed(const LandmarkMap& map, const LandmarkGridIndex& index,
-                                     double cov_trace_bound,
                                      const robot::RangeBearingSensor& sensor, const Pose& f,
                                      const Mat<3>& sigma1, const Measurement& z, double gate,
                                      std::vector<std::uint32_t>& scratch);

@@ -66,6 +66,9 @@ struct SlamOptions {
   double new_landmark_density = 1.0 / (15.0 * kPi);  ///< p0 [1/(m rad)], spec §3.10
   double resample_threshold = 0.5;  ///< resample (systematic) when ESS < threshold * M
   double min_range = 0.0;  ///< detections closer than this are ignored (counted as skipped)
+  /// ML association through the spatial grid index (slam/landmark_index.hpp); false: linear
+  /// scan. Both give the same association; only the cost differs.
+  bool association_index = true;
   int newton_max_iterations = 20;
   double newton_decrement_tolerance = 1e-10;  ///< stop when g^T H^-1 g < this
 
