@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/parallel.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/robot/ute_model.hpp"
 #include "implicit/slam/dataset.hpp"
@@ -226,18 +227,20 @@ namespace {
 
 TEST(LandmarkIndex, FilterGivesTheSamePathWithIndexAndScan) {
   // 2 000 known landmarks (above the map size where the filter switches to the index), ML
-  // association, 150 steps: the index must not change a single bit of the estimate.
+  // association, 150 steps: the index must not change a single bit of the estimate, with one
+  // thread or two (the shared index is only written between the parallel particle loops).
   const SlamScenario base = load_carpark_scenario(default_data_dir());
   const SlamScenario sc = make_dense_scenario(base, 1, 2000, 3);
   SlamDataset d = generate_synthetic(sc, SyntheticConfig(), 2);
   for (SlamMethod m : {SlamMethod::kFastSlam2, SlamMethod::kImplicitRb}) {
-    std::vector<Pose> path[2];
-    std::size_t created[2] = {0, 0};
-    for (int idx = 0; idx < 2; ++idx) {
+    std::vector<Pose> path[3];
+    std::size_t created[3] = {0, 0, 0};
+    for (int idx = 0; idx < 3; ++idx) {
+      const ThreadLimit threads(idx == 2 ? 2 : 1);
       SlamOptions opt;
       opt.method = m;
       opt.association = Association::kMaximumLikelihood;
-      opt.association_index = idx == 1;
+      opt.association_index = idx >= 1;
       opt.particles = 20;
       auto f = make_slam_filter(opt, d.initial_pose);
       f->set_known_map(d.landmarks);
@@ -249,8 +252,11 @@ TEST(LandmarkIndex, FilterGivesTheSamePathWithIndexAndScan) {
       EXPECT_GT(f->stats().updates, 100u);  // detections really were associated
     }
     EXPECT_EQ(created[0], created[1]);
-    for (std::size_t n = 0; n < path[0].size(); ++n)
+    EXPECT_EQ(created[0], created[2]);
+    for (std::size_t n = 0; n < path[0].size(); ++n) {
       ASSERT_EQ(path[0][n], path[1][n]) << to_string(m) << " step " << n;
+      ASSERT_EQ(path[1][n], path[2][n]) << to_string(m) << " two threads, step " << n;
+    }
   }
 }
 
