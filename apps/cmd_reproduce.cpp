@@ -281,6 +281,41 @@ std::string tail(const std::filesystem::path& file, std::size_t lines) {
 
 // ---- Figures ----------------------------------------------------------------------------------
 
+/// Each sweep configuration writes its one-row summary (`mcl_summary.csv`, `slam_summary.csv`)
+/// into its own folder under DIR/runs; the CPU-time-vs-error panels need every configuration, so
+/// the rows of this run's configurations (named in `results`) are gathered into DIR/<name>, after
+/// the figure configuration's own rows. Identical rows are kept once, so running this again
+/// (e.g. with --report-only) changes nothing. Returns the number of data rows written.
+std::size_t gather_summaries(const json& results, const std::filesystem::path& dir,
+                             const std::string& name) {
+  std::vector<std::filesystem::path> files;
+  if (std::filesystem::exists(dir / name)) files.push_back(dir / name);
+  if (results.contains("experiments"))
+    for (const auto& [experiment, e] : results["experiments"].items())
+      for (const auto& run : e.value("runs", json::array())) {
+        const auto f = dir / "runs" / folder_name(run.value("label", std::string())) / name;
+        if (run.value("status", std::string()) == "ok" && std::filesystem::exists(f))
+          files.push_back(f);
+      }
+  std::string header;
+  std::vector<std::string> rows;
+  for (const auto& f : files) {
+    std::ifstream in(f);
+    std::string line;
+    if (!std::getline(in, line)) continue;
+    if (header.empty()) header = line;
+    if (line != header) continue;  // a summary from another version of the program: leave it out
+    while (std::getline(in, line))
+      if (!line.empty() && std::find(rows.begin(), rows.end(), line) == rows.end())
+        rows.push_back(line);
+  }
+  if (header.empty()) return 0;
+  std::string text = header + "\n";
+  for (const auto& r : rows) text += r + "\n";
+  write_text(dir / name, text);
+  return rows.size();
+}
+
 struct FigureSpec {
   int number;
   std::string experiment;
@@ -369,6 +404,14 @@ json run_plan(const Plan& plan, const RunContext& ctx, const ReproduceOptions& o
   if (ctx.show_progress() && !plan.configs.empty())
     fmt::print(stderr, "reproduce: {} configurations ({} settings); first: {}\n",
                plan.configs.size(), opt.quick ? "quick" : "full", plan.configs.front().label);
+  // Summaries are appended by each run: start this run's from empty, so that rows of an earlier
+  // run into the same folder never reach the figures.
+  for (const auto& c : plan.configs) {
+    if (c.writes_figures)
+      std::filesystem::remove(ctx.out_dir / fmt::format("{}_summary.csv", c.experiment));
+    else
+      std::filesystem::remove_all(ctx.out_dir / "runs" / folder_name(c.label));
+  }
   for (std::size_t i = 0; i < plan.configs.size(); ++i) {
     const auto& c = plan.configs[i];
     RunContext run_ctx = ctx;
@@ -426,6 +469,8 @@ int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt) {
   results["tables"] = report::write_table_csvs(results, dir);
   results["figures"] = json::object();
   write_text(dir / "results.json", results.dump(2) + "\n");
+  gather_summaries(results, dir, "mcl_summary.csv");
+  gather_summaries(results, dir, "slam_summary.csv");
   results["figures"] = draw_figures(results, dir, opt.no_figures, ctx.show_progress());
   write_text(dir / "results.json", results.dump(2) + "\n");
   const auto doc = report::build_report(results, dir);

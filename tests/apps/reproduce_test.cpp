@@ -116,6 +116,13 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
       ASSERT_TRUE(std::filesystem::exists(table)) << table;
       EXPECT_GE(data_rows(table), 1) << table;
     }
+    // The CPU-time-vs-error panels (Figures 6, 7) need one summary row per successful
+    // configuration, gathered from the per-configuration folders.
+    if (name == "mcl" || name == "slam") {
+      std::size_t good = 0;
+      for (const auto& run : e["runs"]) good += run.value("status", "") == "ok";
+      EXPECT_EQ(data_rows(dir.path() / (name + "_summary.csv")), static_cast<int>(good)) << name;
+    }
     for (int n : figures) {
       const std::string key = "figure" + std::to_string(n);
       const auto& f = results["figures"][key];
@@ -132,6 +139,13 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
       run_cli("reproduce --report-only --no-figures --quiet --out '" + dir.path().string() + "'");
   EXPECT_TRUE(again.code == 0 || again.code == 3) << again.err;
   EXPECT_TRUE(std::filesystem::exists(dir.path() / "report.md"));
+  // Gathering the summaries again adds nothing.
+  for (const std::string name : {"mcl", "slam"}) {
+    if (results["experiments"][name].value("status", "") != "ok") continue;
+    EXPECT_EQ(data_rows(dir.path() / (name + "_summary.csv")),
+              static_cast<int>(results["experiments"][name]["runs"].size()))
+        << name;
+  }
 }
 
 // --json: stdout is exactly results.json's content, stderr stays empty; a subset with --only
