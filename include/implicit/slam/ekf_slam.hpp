@@ -11,7 +11,8 @@
 //   ekf.update(k, wrap(z - h(x, m_k)), J_h_x, J_h_m, Sigma2);       // later sightings
 //
 // Updates use the Joseph form P <- (I - K H) P (I - K H)^T + K R K^T, evaluated in O(n^2) with the
-// sparsity of H (5 non-zero columns), then symmetrised; S is factorised by Cholesky (no inverse).
+// sparsity of H (5 non-zero columns) as one rank-4 update of the lower triangle, mirrored so P
+// stays exactly symmetric; S is factorised by Cholesky (no inverse).
 // Mistake to avoid: passing the residual h - z instead of the innovation z - h (sign).
 
 #include <Eigen/Core>
@@ -49,9 +50,10 @@ class EkfSlamCore {
   int augment(const Vec<2>& m, const Mat23& Gx, const Mat<2>& GzRGz);
 
  private:
+  void mirror_lower_to_upper();
+
   Eigen::VectorXd mean_;
   Eigen::MatrixXd cov_;
-  Eigen::MatrixXd scratch_a_;  // n x n workspace of the Joseph update
 };
 
 }  // namespace implicit::slam
