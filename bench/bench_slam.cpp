@@ -17,6 +17,7 @@
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/slam/dataset.hpp"
+#include "implicit/slam/ekf_slam.hpp"
 #include "implicit/slam/evaluate.hpp"
 #include "implicit/slam/landmark_index.hpp"
 #include "implicit/slam/landmark_map.hpp"
@@ -164,6 +165,25 @@ void BM_AssociationVsLandmarks(benchmark::State& state) {
 BENCHMARK(BM_AssociationVsLandmarks)
     ->ArgsProduct({{100, 1000, 10000, 100000}, {0, 1}})
     ->ArgNames({"N", "indexed"});
+
+// EKF-SLAM's Kalman update against the map size: O(n^2) in the state dimension n = 3 + 2N,
+// the reason EKF-SLAM does not scale to large maps (Victoria Park) and the particle filters do.
+void BM_EkfUpdateVsLandmarks(benchmark::State& state) {
+  const int landmarks = static_cast<int>(state.range(0));
+  EkfSlamCore ekf(Vec<3>(0.0, 0.0, 0.3), 0.01 * Mat<3>::Identity());
+  const Mat23 jx = (Mat23() << -0.6, -0.8, 0.0, 0.05, -0.04, -1.0).finished();
+  const Mat<2> jm = (Mat<2>() << 0.6, 0.8, -0.05, 0.04).finished();
+  const Mat<2> r = Vec<2>(0.01, 1e-4).asDiagonal();
+  for (int k = 0; k < landmarks; ++k)
+    ekf.augment(Vec<2>(k % 100, k / 100), jx, jm * r * jm.transpose());
+  int k = 0;
+  for (auto _ : state) {
+    ekf.update(k, Vec<2>(1e-3, -1e-4), jx, jm, r);
+    k = (k + 7) % landmarks;
+  }
+  state.counters["state_dim"] = 3 + 2 * landmarks;
+}
+BENCHMARK(BM_EkfUpdateVsLandmarks)->Arg(100)->Arg(300)->Arg(1000)->Unit(benchmark::kMicrosecond);
 
 // Resampling M = 100 particles whose maps hold N landmarks, then one landmark update per
 // particle (what the next step does): copy-on-write maps vs plain vectors deep-copied.
