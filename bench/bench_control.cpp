@@ -103,21 +103,6 @@ void BM_GenericHimmelblauRandomMap(benchmark::State& state) {
 }
 BENCHMARK(BM_GenericHimmelblauRandomMap)->Unit(benchmark::kMicrosecond);
 
-struct FreeWalker {
-  template <typename T>
-  Eigen::Matrix<T, 1, 1> drift(const Eigen::Matrix<T, 1, 1>& x, double) const {
-    return x * 0.0;
-  }
-  template <typename T>
-  T running_cost(const Eigen::Matrix<T, 1, 1>& x, double) const {
-    return x(0) * 0.0;
-  }
-  template <typename T>
-  T final_cost(const Eigen::Matrix<T, 1, 1>& x) const {
-    return 0.5 * x(0) * x(0);
-  }
-};
-
 // The double slit through the generic problem with a HardWall: two constrained minima (range-
 // space Newton on the 100-D path), a two-component mixture, M samples, frozen-wall FD-CRN.
 // Without the wall: the same 100-D path, for the cost of the wall machinery alone.
@@ -130,7 +115,7 @@ void BM_GenericSlitControl(benchmark::State& state, bool wall, SamplingMap map) 
   s.dt = 0.02;
   std::vector<HardWall<1>> walls;
   if (wall) walls.push_back({.time = 1.0, .openings = {{-6.0, -4.0}, {6.0, 8.0}}});
-  const ControlProblem problem(FreeWalker{}, s, walls);
+  const ControlProblem problem(FreeWalkerModel{}, s, walls);
   const int M = static_cast<int>(state.range(0));
   std::uint64_t i = 0;
   for (auto _ : state) {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <vector>
 
+#include "implicit/control/double_slit.hpp"
 #include "implicit/control/himmelblau.hpp"
 #include "implicit/control/path_integral.hpp"
 #include "implicit/core/error.hpp"
@@ -14,22 +15,6 @@ using implicit::Mat;
 using implicit::Vec;
 
 namespace {
-
-// Free walker with a quadratic final cost: the double slit after its wall.
-struct FreeWalker {
-  template <typename T>
-  Eigen::Matrix<T, 1, 1> drift(const Eigen::Matrix<T, 1, 1>& x, double) const {
-    return x * 0.0;
-  }
-  template <typename T>
-  T running_cost(const Eigen::Matrix<T, 1, 1>& x, double) const {
-    return x(0) * 0.0;
-  }
-  template <typename T>
-  T final_cost(const Eigen::Matrix<T, 1, 1>& x) const {
-    return 0.5 * x(0) * x(0);
-  }
-};
 
 // Ornstein-Uhlenbeck drift, quadratic running and final costs: F is quadratic.
 struct LinearQuadratic {
@@ -110,7 +95,7 @@ TEST(ControlSpec, ConditionEightAndBadInput) {
 
 TEST(PathIntegral, ExactForQuadraticFAnyM) {
   // After the double slit's wall: log psi = 1/2 log(g/(g + s n dt)) - x^2/(2(g + s n dt)).
-  ControlProblem problem(FreeWalker{}, scalar_spec(1.0, 0.1, 1.0, 0.02));
+  ControlProblem problem(FreeWalkerModel{}, scalar_spec(1.0, 0.1, 1.0, 0.02));
   for (int M : {1, 7}) {
     for (int k : {0, 30, 49}) {
       const Vec<1> x(0.7);
@@ -179,7 +164,7 @@ TEST(PathIntegral, HimmelblauThroughTheGenericProblem) {
 }
 
 TEST(PathIntegral, ClosedLoopTakesTheNoiseAsInput) {
-  ControlProblem problem(FreeWalker{}, scalar_spec(1.0, 0.1, 1.0, 0.02));
+  ControlProblem problem(FreeWalkerModel{}, scalar_spec(1.0, 0.1, 1.0, 0.02));
   const Eigen::MatrixXd zero = Eigen::MatrixXd::Zero(1, 50);
   const auto r = simulate_closed_loop(problem, Vec<1>(1.0), zero, {.samples = 3}, 1);
   ASSERT_EQ(r.x.size(), 51u);
@@ -241,7 +226,7 @@ TEST(PathIntegral, RandomMapExactForQuadraticF) {
     EXPECT_EQ(rnd.wall_hits, 0);
   }
   // After the double slit's wall (closed form in ExactForQuadraticFAnyM), through the control.
-  ControlProblem walker(FreeWalker{}, scalar_spec(1.0, 0.1, 1.0, 0.02));
+  ControlProblem walker(FreeWalkerModel{}, scalar_spec(1.0, 0.1, 1.0, 0.02));
   const auto c =
       estimate_control(walker, Vec<1>(0.7), 10, {.samples = 3, .map = SamplingMap::kRandom}, {5});
   EXPECT_NEAR(c.u(0), -0.7 / (0.1 + 40 * 0.02), 1e-7);
@@ -271,7 +256,7 @@ TEST(PathIntegral, RandomAndLinearMapAgreeOnANonQuadraticProblem) {
 TEST(PathIntegral, HardWallMixtureReproducesTheDoubleSlit) {
   // Spec §2.4.1 / §2.4.3: the discretisation is exact at grid times, so E[psi_hat] = psi_exact.
   // Tolerance: 4.5 SE of log psi_hat (relative sd of the weights / sqrt(M)).
-  ControlProblem problem(FreeWalker{}, scalar_spec(1.0, 0.1, 2.0, 0.02), slit_walls());
+  ControlProblem problem(FreeWalkerModel{}, scalar_spec(1.0, 0.1, 2.0, 0.02), slit_walls());
   EXPECT_NEAR(slit_exact_log_psi(1.0), -24.070635, 1e-6);  // spec §2.4.2 table
   for (double x : {1.0, 1.9}) {  // left slit dominates; both slits matter (switch at 1.909)
     const auto e = estimate_log_psi_implicit(problem, Vec<1>(x), 0, 10000, {31});
@@ -312,7 +297,7 @@ TEST(PathIntegral, HardWallControlMatchesTheDoubleSlit) {
   // Frozen-wall FD-CRN control at (1, 0), M = 200, R = 40 independent evaluations: the mean
   // must be within 4.5 sd / sqrt(R) of the exact -5.109548, plus the O(1/M) self-normalisation
   // bias (spec §2.4.5 measures +0.011 at M = 50 for W2, i.e. 0.003 at M = 200; allow 0.01).
-  ControlProblem problem(FreeWalker{}, scalar_spec(1.0, 0.1, 2.0, 0.02), slit_walls());
+  ControlProblem problem(FreeWalkerModel{}, scalar_spec(1.0, 0.1, 2.0, 0.02), slit_walls());
   const int R = 40;
   double s = 0.0, s2 = 0.0;
   for (int r = 0; r < R; ++r) {
@@ -336,7 +321,7 @@ TEST(PathIntegral, HardWallControlMatchesTheDoubleSlit) {
 
 TEST(PathIntegral, HardWallBadInput) {
   const auto spec = scalar_spec(1.0, 0.1, 2.0, 0.02);
-  auto make = [&](HardWall<1> w) { ControlProblem p(FreeWalker{}, spec, {w}); };
+  auto make = [&](HardWall<1> w) { ControlProblem p(FreeWalkerModel{}, spec, {w}); };
   EXPECT_THROW(make({.time = 1.01, .openings = {{0, 1}}}), implicit::InvalidArgument);
   EXPECT_THROW(make({.time = 0.0, .openings = {{0, 1}}}), implicit::InvalidArgument);
   EXPECT_THROW(make({.time = 2.02, .openings = {{0, 1}}}), implicit::InvalidArgument);

@@ -52,6 +52,24 @@ struct DoubleSlitParameters {
   double gamma() const { return control_cost * sigma; }
 };
 
+/// The double slit's dynamics and costs in the form the generic estimator of path_integral.hpp
+/// takes (dx = u dt + dW, no running cost, final cost x^2 / 2); the wall is not part of the model
+/// but a `HardWall` passed beside it. Also the simplest nonzero test problem after the wall.
+struct FreeWalkerModel {
+  template <typename T>
+  Eigen::Matrix<T, 1, 1> drift(const Eigen::Matrix<T, 1, 1>& x, double) const {
+    return x * 0.0;
+  }
+  template <typename T>
+  T running_cost(const Eigen::Matrix<T, 1, 1>& x, double) const {
+    return x(0) * 0.0;
+  }
+  template <typename T>
+  T final_cost(const Eigen::Matrix<T, 1, 1>& x) const {
+    return 0.5 * x(0) * x(0);
+  }
+};
+
 /// How psi is estimated for t < t1 (spec §2.4.4-2.4.5).
 enum class SlitEstimator {
   kPaper,       ///< P: dominant slit only, no weights, plain FD-CRN (the paper's; biased)
