@@ -73,8 +73,8 @@ json to_json(const SlamSettings& s) {
 }
 
 /// The sweep behind each table. Full settings follow the paper (Table 2: 500 runs; Table 5:
-/// its M values over 20 seeds; Table 6: 50 data sets at M = 100) within about 15 minutes on
-/// 2 cores; --quick keeps every table and figure but with few runs, for about 2 minutes.
+/// its M values over 20 seeds; Table 6: 50 data sets at M = 100) within about 5 minutes on
+/// 2 cores; --quick keeps every table and figure but with few runs, for about 15 seconds.
 struct Plan {
   std::vector<Config> configs;
   json settings;  ///< per experiment, the sweep as a whole (for the report)
@@ -558,7 +558,7 @@ Registrar reg{
       ctx.out_dir = "out";
       add_common_options(sub, ctx);
       sub.add_flag("--quick", opt.quick,
-                   "Reduced runs (about 2 minutes instead of 15); the report says which");
+                   "Reduced runs (about 15 seconds instead of 5 minutes); the report says which");
       sub.add_option("--only", opt.only, "Run a subset of the experiments (comma-separated)")
           ->delimiter(',')
           ->check(CLI::IsMember(kExperiments));
@@ -566,7 +566,7 @@ Registrar reg{
                    "Rebuild the report and figures from DIR/results.json without running");
       sub.add_flag("--no-figures", opt.no_figures, "Do not run the plot scripts");
       set_examples(sub, {"implicit reproduce                       # full settings into out/",
-                         "implicit reproduce --quick --out /tmp/r  # about 2 minutes",
+                         "implicit reproduce --quick --out /tmp/r  # about 15 seconds",
                          "implicit reproduce --only slit,arm --threads 2 --seed 7",
                          "implicit reproduce --report-only --out out  # redraw from results.json"});
       sub.callback([] {
