@@ -66,7 +66,9 @@ struct Himmelblau2 {
   }
 };
 
-// The same evaluation through the generic problem (autodiff, banded Newton on the 40-D path).
+// The same evaluation through the generic problem (autodiff, banded Newton on the 40-D path),
+// with the linear map (arg 0) and the random map (arg 1: one scalar root per sample, O(n) jet
+// evaluations per root iteration).
 void BM_GenericHimmelblauControl(benchmark::State& state) {
   ControlSpec<2, 2> s;
   s.G.setIdentity();
@@ -75,33 +77,16 @@ void BM_GenericHimmelblauControl(benchmark::State& state) {
   s.horizon = 20.0;
   s.dt = 1.0;
   const ControlProblem problem(Himmelblau2{}, s);
-  std::uint64_t i = 0;
-  for (auto _ : state) {
-    const auto c =
-        estimate_control(problem, implicit::Vec<2>(-1, -4), 0, {.samples = 50}, {1, i++, 0, 0});
-    benchmark::DoNotOptimize(c.u);
-  }
-}
-BENCHMARK(BM_GenericHimmelblauControl)->Unit(benchmark::kMicrosecond);
-
-// The generic estimator with the random map (one scalar root per sample, O(n) jet evaluations
-// per root iteration) against the linear map, on the same Himmelblau path.
-void BM_GenericHimmelblauRandomMap(benchmark::State& state) {
-  ControlSpec<2, 2> s;
-  s.G.setIdentity();
-  s.noise_covariance = 0.01 * implicit::Mat<2>::Identity();
-  s.control_cost = 0.01 * implicit::Mat<2>::Identity();
-  s.horizon = 20.0;
-  s.dt = 1.0;
-  const ControlProblem problem(Himmelblau2{}, s);
+  const SamplingMap map = state.range(0) == 0 ? SamplingMap::kLinear : SamplingMap::kRandom;
+  state.SetLabel(state.range(0) == 0 ? "linear map" : "random map");
   std::uint64_t i = 0;
   for (auto _ : state) {
     const auto c = estimate_control(problem, implicit::Vec<2>(-1, -4), 0,
-                                    {.samples = 50, .map = SamplingMap::kRandom}, {1, i++, 0, 0});
+                                    {.samples = 50, .map = map}, {1, i++, 0, 0});
     benchmark::DoNotOptimize(c.u);
   }
 }
-BENCHMARK(BM_GenericHimmelblauRandomMap)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GenericHimmelblauControl)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 // The double slit through the generic problem with a HardWall: two constrained minima (range-
 // space Newton on the 100-D path), a two-component mixture, M samples, frozen-wall FD-CRN.
