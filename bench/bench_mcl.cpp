@@ -133,22 +133,15 @@ void BM_CarParkRun(benchmark::State& state) {
                                   (static_cast<double>(state.iterations()) *
                                    static_cast<double>(problem.schedule.steps.size()));
 }
-BENCHMARK(BM_CarParkRun<filter::ImplicitProposal>)
-    ->Args({100, 1})
-    ->Args({100, 2})
-    ->Args({10000, 1})
-    ->Args({10000, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(1)
-    ->UseRealTime();
-BENCHMARK(BM_CarParkRun<filter::BootstrapProposal>)
-    ->Args({100, 1})
-    ->Args({100, 2})
-    ->Args({10000, 1})
-    ->Args({10000, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(1)
-    ->UseRealTime();
+// M = 100 and 10 000 particles, 1 and 2 threads: per-step cost and parallel speedup.
+void car_park_args(benchmark::internal::Benchmark* b) {
+  b->ArgsProduct({{100, 10000}, {1, 2}})
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(1)
+      ->UseRealTime();
+}
+BENCHMARK(BM_CarParkRun<filter::ImplicitProposal>)->Apply(car_park_args);
+BENCHMARK(BM_CarParkRun<filter::BootstrapProposal>)->Apply(car_park_args);
 
 }  // namespace
 

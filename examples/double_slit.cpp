@@ -13,22 +13,6 @@
 
 namespace ic = implicit::control;
 
-// dx = u dt + dW with final cost x^2 / 2 and no running cost (the wall is given separately).
-struct FreeWalker {
-  template <typename T>
-  Eigen::Matrix<T, 1, 1> drift(const Eigen::Matrix<T, 1, 1>& x, double) const {
-    return x * 0.0;
-  }
-  template <typename T>
-  T running_cost(const Eigen::Matrix<T, 1, 1>& x, double) const {
-    return x(0) * 0.0;
-  }
-  template <typename T>
-  T final_cost(const Eigen::Matrix<T, 1, 1>& x) const {
-    return 0.5 * x(0) * x(0);
-  }
-};
-
 int main() {
   const ic::DoubleSlit slit;  // Table 1: slits [-6,-4] and [6,8] at t1 = 1, tf = 2, x(0) = 1
 
@@ -59,7 +43,9 @@ int main() {
   spec.horizon = 2.0;
   spec.dt = 0.02;
   const ic::HardWall<1> wall{.time = 1.0, .openings = {{-6.0, -4.0}, {6.0, 8.0}}};
-  const ic::ControlProblem problem(FreeWalker{}, spec, {wall});
+  // The double slit's dynamics and costs (dx = u dt + dW, final cost x^2 / 2) as a model of the
+  // generic estimator; the wall is given beside it.
+  const ic::ControlProblem problem(ic::FreeWalkerModel{}, spec, {wall});
   const auto c = ic::estimate_control(problem, implicit::Vec<1>(1.0), 0,
                                       {.samples = 50, .fd_step = 1e-3}, {.seed = 3});
   std::printf("generic HardWall: u = %.6f, log psi = %.4f (exact %.4f), ESS %.1f, %d of %d hit\n",
