@@ -7,6 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "core/stat_helpers.hpp"
 #include "implicit/control/himmelblau.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
@@ -157,21 +158,6 @@ TEST(Himmelblau, BridgeReferenceMatchesIndependentComputation) {
   EXPECT_NEAR(ref.f_before_last_step_sd, 2.7366168051, 1e-9);
 }
 
-namespace {
-struct RunStatistics {
-  double mean = 0.0, se = 0.0;
-};
-RunStatistics statistics(const std::vector<double>& v) {
-  const double n = static_cast<double>(v.size());
-  RunStatistics s;
-  for (double x : v) s.mean += x / n;
-  double q = 0.0;
-  for (double x : v) q += (x - s.mean) * (x - s.mean);
-  s.se = std::sqrt(q / (n - 1.0) / n);
-  return s;
-}
-}  // namespace
-
 TEST(Himmelblau, ClosedLoopIsTheLaplaceBridge) {
   // With gamma = 1e-4 the weights are uniform and u_hat = sigma grad log psi_hat equals the
   // Laplace control (z* - x_k)/(n dt) up to the posterior-mean shift of the end point,
@@ -227,7 +213,9 @@ TEST(Himmelblau, MeanCostAgainstClosedForm) {
         EXPECT_EQ(run.failed_minimizations, 0);
       },
       1);
-  const auto c = statistics(cost), a = statistics(adjusted), g = statistics(f19);
+  const auto c = implicit::testing::summarise_runs(cost),
+             a = implicit::testing::summarise_runs(adjusted),
+             g = implicit::testing::summarise_runs(f19);
   EXPECT_NEAR(c.mean, ref.cost(), 4.5 * c.se);
   EXPECT_NEAR(g.mean, ref.f_before_last_step, 4.5 * g.se);
   EXPECT_LT(a.se, 5e-4);  // the control variate works (raw SE ~0.17 with 40 runs)

@@ -28,6 +28,21 @@ struct Estimate {
   double z(double exact) const { return (value - exact) / se; }
 };
 
+/// Mean, sample standard deviation and standard error of independent runs of an experiment.
+struct RunSummary {
+  double mean = 0.0, sd = 0.0, se = 0.0;
+};
+inline RunSummary summarise_runs(std::span<const double> v) {
+  const double n = static_cast<double>(v.size());
+  RunSummary s;
+  for (double x : v) s.mean += x / n;
+  double q = 0.0;
+  for (double x : v) q += (x - s.mean) * (x - s.mean);
+  s.sd = std::sqrt(q / (n - 1.0));
+  s.se = s.sd / std::sqrt(n);
+  return s;
+}
+
 /// Z-hat = mean of the raw weights exp(l_j), SE = sd(w)/sqrt(M) (spec §1.5). Weights are scaled
 /// by exp(max l) only implicitly: the oracles keep log-weights of order 1, so exp is safe.
 inline Estimate normalising_constant(std::span<const double> log_weights) {

@@ -17,6 +17,7 @@
 
 #include <fmt/format.h>
 
+#include "core/stat_helpers.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/evaluate.hpp"
@@ -33,18 +34,8 @@ struct Row {
   bool particles = true;                          // false: EKF-SLAM (no ESS, no resampling)
 };
 
-struct Sample {
-  double mean = 0.0, sd = 0.0;
-};
-
-Sample summarise(const std::vector<double>& v) {
-  const double n = static_cast<double>(v.size());
-  Sample s;
-  for (double x : v) s.mean += x / n;
-  for (double x : v) s.sd += (x - s.mean) * (x - s.mean) / (n - 1.0);
-  s.sd = std::sqrt(s.sd);
-  return s;
-}
+using Sample = implicit::testing::RunSummary;
+Sample summarise(const std::vector<double>& v) { return implicit::testing::summarise_runs(v); }
 
 SlamOptions options_m100(SlamMethod method, std::uint64_t seed) {
   SlamOptions opt;
