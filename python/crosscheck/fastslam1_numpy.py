@@ -133,6 +133,8 @@ def main():
     ap.add_argument("--particles", type=int, default=100)
     ap.add_argument("--seed", type=int, default=1, help="run r of data set i uses seed + 1000 i + r")
     a = ap.parse_args()
+    if a.runs < 1 or a.particles < 1:
+        ap.error("--runs and --particles must be at least 1")
     landmarks = np.loadtxt(LANDMARKS, delimiter=",", skiprows=1)[:, 1:3]
     shapes = []
     for i, path in enumerate(a.data):
@@ -146,8 +148,11 @@ def main():
             shapes.append(shape)
             print(f"{path.name} {seed} {shape:.6f} {ess:.4f} {res}", flush=True)
     v = np.array(shapes)
-    se = v.std(ddof=1) / np.sqrt(len(v)) if len(v) > 1 else float("nan")
-    print(f"mean map shape {v.mean():.4f} m, SE {se:.4f} m over {len(v)} runs")
+    if len(v) > 1:
+        se = v.std(ddof=1) / np.sqrt(len(v))
+        print(f"mean map shape {v.mean():.4f} m, SE {se:.4f} m over {len(v)} runs")
+    else:
+        print(f"mean map shape {v.mean():.4f} m over 1 run (no standard error)")
 
 
 if __name__ == "__main__":
