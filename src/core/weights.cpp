@@ -25,9 +25,10 @@ WeightSummary normalize_log_weights(std::span<const double> log_weights,
           normalized.size());
   require(!log_weights.empty(), "normalize_log_weights: expected at least one weight, got none");
   for (std::size_t i = 0; i < log_weights.size(); ++i)
-    require(!std::isnan(log_weights[i]) && log_weights[i] != std::numeric_limits<double>::infinity(),
-            "normalize_log_weights: log-weight {} is {} (expected a number or -inf)", i,
-            log_weights[i]);
+    require(
+        !std::isnan(log_weights[i]) && log_weights[i] != std::numeric_limits<double>::infinity(),
+        "normalize_log_weights: log-weight {} is {} (expected a number or -inf)", i,
+        log_weights[i]);
   WeightSummary s;
   const double lse = log_sum_exp(log_weights);
   const double n = static_cast<double>(log_weights.size());

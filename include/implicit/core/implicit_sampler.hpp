@@ -41,9 +41,9 @@ struct SampleSet {
   std::vector<double> log_weights;             ///< log w_j with every constant (E[w] = Z)
   std::vector<double> weights;                 ///< normalised weights w_bar_j
   double log_Z = -std::numeric_limits<double>::infinity();  ///< log of the mean weight
-  double ess = 0.0;                            ///< effective sample size
-  int zero_weight = 0;       ///< samples with weight 0 (outside the support, or map failures)
-  int map_failures = 0;      ///< random-map root finding failures
+  double ess = 0.0;                                         ///< effective sample size
+  int zero_weight = 0;   ///< samples with weight 0 (outside the support, or map failures)
+  int map_failures = 0;  ///< random-map root finding failures
   MinimizeStatus minimize_status = MinimizeStatus::kConverged;
   std::vector<Laplace<N>> modes;  ///< the Laplace approximation(s) used
 
@@ -71,8 +71,9 @@ SampleSet<T::Dim> sample_with(const T& f, const Laplace<T::Dim>& lp, std::size_t
   constexpr int N = T::Dim;
   require(M > 0, "implicit sampling: expected at least one sample, got {}", M);
   const int m = f.dim();
-  require(lp.dim() == m, "implicit sampling: the Laplace approximation has dimension {}, the "
-                         "target {}", lp.dim(), m);
+  require(lp.dim() == m,
+          "implicit sampling: the Laplace approximation has dimension {}, the target {}", lp.dim(),
+          m);
   SampleSet<N> s;
   s.modes = {lp};
   s.x.resize(m, static_cast<Eigen::Index>(M));
@@ -90,8 +91,10 @@ SampleSet<T::Dim> sample_with(const T& f, const Laplace<T::Dim>& lp, std::size_t
     }
     s.x.col(static_cast<Eigen::Index>(j)) = x;
   };
-  if (options.parallel) parallel_for(M, one);
-  else for (std::size_t j = 0; j < M; ++j) one(j);
+  if (options.parallel)
+    parallel_for(M, one);
+  else
+    for (std::size_t j = 0; j < M; ++j) one(j);
   for (auto fl : failed) s.map_failures += fl;
   detail::finish(s);
   return s;
@@ -132,8 +135,10 @@ SampleSet<T::Dim> sample_mixture(const T& f, const MixtureProposal<T::Dim>& q, s
     s.log_weights[j] = q.sample(f, u, xi, x);
     s.x.col(static_cast<Eigen::Index>(j)) = x;
   };
-  if (options.parallel) parallel_for(M, one);
-  else for (std::size_t j = 0; j < M; ++j) one(j);
+  if (options.parallel)
+    parallel_for(M, one);
+  else
+    for (std::size_t j = 0; j < M; ++j) one(j);
   detail::finish(s);
   return s;
 }

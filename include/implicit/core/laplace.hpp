@@ -19,9 +19,9 @@ namespace implicit {
 
 template <int N>
 struct Laplace {
-  Vec<N> mu;            ///< centre (the minimiser of F)
-  double phi = 0.0;     ///< F(mu)
-  Mat<N> L;             ///< lower Cholesky factor of the Hessian H = L L^T
+  Vec<N> mu;               ///< centre (the minimiser of F)
+  double phi = 0.0;        ///< F(mu)
+  Mat<N> L;                ///< lower Cholesky factor of the Hessian H = L L^T
   double log_det_L = 0.0;  ///< sum_i log L_ii = 1/2 log det H
 
   int dim() const { return static_cast<int>(mu.size()); }

@@ -6,7 +6,8 @@
 // The engine is Random123's Philox4x64-10, a keyed bijection of a counter, so a stream needs no
 // state shared with any other stream: results do not depend on thread count or evaluation order.
 //
-//   implicit::Rng rng({.seed = 42, .step = n, .index = j, .purpose = implicit::purpose::kProposal});
+//   using implicit::purpose::kProposal;
+//   implicit::Rng rng({.seed = 42, .step = n, .index = j, .purpose = kProposal});
 //   double u = rng.uniform();      // in (0, 1), 53 random bits
 //   double z = rng.normal();       // standard normal (Box-Muller, our own transform)
 //

@@ -27,7 +27,7 @@ double log_mean_exp(std::span<const double> a);
 
 struct WeightSummary {
   double log_mean = -std::numeric_limits<double>::infinity();  ///< log of the mean raw weight
-  double ess = 0.0;     ///< effective sample size 1 / sum w_bar^2
+  double ess = 0.0;       ///< effective sample size 1 / sum w_bar^2
   bool all_zero = false;  ///< every log-weight was -inf; uniform weights were returned
 };
 
