@@ -62,6 +62,18 @@ void setup_slam(CLI::App& sub) {
   sub.add_option("--min-range", s.min_range, "Ignore detections closer than this [m]")
       ->check(CLI::Range(0.0, 100.0))
       ->capture_default_str();
+  sub.add_option("--range-sd", s.range_sd,
+                 "Filters' range noise sd [m] (0 = spec Sigma2: 0.224 m; synthetic data keep it)")
+      ->check(CLI::Range(0.0, 100.0));
+  sub.add_option("--bearing-sd", s.bearing_sd_deg,
+                 "Filters' bearing noise sd [deg] (0 = spec Sigma2: 1.69 deg)")
+      ->check(CLI::Range(0.0, 90.0));
+  sub.add_option("--gate-chi2", s.gate_chi2,
+                 "ML association gate on the squared Mahalanobis distance (0 = 9.21, chi2_2 99 %)")
+      ->check(CLI::Range(0.0, 1e6));
+  sub.add_option("--new-landmark-density", s.new_landmark_density,
+                 "p0, likelihood of a new landmark [1/(m rad)] (0 = 1/(15 pi))")
+      ->check(CLI::Range(0.0, 1e6));
   add_common_options(sub, cmd->ctx);
   set_examples(sub, {"implicit slam --method implicit-rb --particles 100 --datasets 10 --json",
                      "implicit slam --method ekf --datasets 50 --out out/slam",

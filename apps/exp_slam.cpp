@@ -123,6 +123,19 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   base.particles = particles;
   base.min_range = s.min_range;
   base.motion.control_std = Vec<2>(s.control_noise, s.control_noise);
+  require(s.range_sd >= 0.0 && s.bearing_sd_deg >= 0.0 && s.gate_chi2 >= 0.0 &&
+              s.new_landmark_density >= 0.0,
+          "--range-sd, --bearing-sd, --gate-chi2, --new-landmark-density: expected >= 0 (0 = "
+          "the default), got {}, {}, {}, {}",
+          s.range_sd, s.bearing_sd_deg, s.gate_chi2, s.new_landmark_density);
+  if (s.range_sd > 0.0 || s.bearing_sd_deg > 0.0) {
+    const Mat<2>& spec = base.sensor.noise_covariance();
+    base.sensor = robot::RangeBearingSensor(
+        s.range_sd > 0.0 ? s.range_sd * s.range_sd : spec(0, 0),
+        s.bearing_sd_deg > 0.0 ? std::pow(s.bearing_sd_deg * kPi / 180.0, 2) : spec(1, 1));
+  }
+  if (s.gate_chi2 > 0.0) base.gate_chi2 = s.gate_chi2;
+  if (s.new_landmark_density > 0.0) base.new_landmark_density = s.new_landmark_density;
   if (consistent) {
     const double f = std::sqrt(s.consistent_noise_scale);
     base.motion.control_std *= f;
@@ -205,6 +218,12 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["data"] =
       logs.empty() ? (s.dense_landmarks > 0 ? scenario.name : "carpark-synthetic") : data[0].name;
   j["laser_every"] = s.laser_every;
+  // The filter's model, so that a run on real data can be repeated from its JSON alone.
+  j["control_noise"] = s.control_noise;
+  j["range_sd_m"] = std::sqrt(base.sensor.noise_covariance()(0, 0));
+  j["bearing_sd_deg"] = std::sqrt(base.sensor.noise_covariance()(1, 1)) * 180.0 / kPi;
+  j["gate_chi2"] = base.gate_chi2;
+  j["new_landmark_density"] = base.new_landmark_density;
   j["seed"] = ctx.seed;
   j["error_percent_mean"] = mean(err);
   j["error_percent_std"] = stddev(err);

@@ -72,6 +72,12 @@ struct SlamSettings {
   int dense_laps = 1;                    ///< route length of the dense field, in Car Park laps
   double min_range = 0.0;                ///< detections closer than this are ignored [m]
   double control_noise = 0.5;            ///< P = diag(p, p) of the filters' motion model
+  // The filters' laser model and association; 0 keeps the spec's values (Sigma2 of §3.2, the
+  // chi^2_2 99 % gate 9.21, p0 = 1/(15 pi)). The synthetic data always use the spec's Sigma2.
+  double range_sd = 0.0;              ///< sd of the range noise [m]
+  double bearing_sd_deg = 0.0;        ///< sd of the bearing noise [deg]
+  double gate_chi2 = 0.0;             ///< ML gate on d^2
+  double new_landmark_density = 0.0;  ///< p0 [1/(m rad)]
 };
 /// Keys: method, particles, datasets, error_percent_mean/std, error_aligned_percent_mean,
 /// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_map_m, nees_mean (consistent mode),

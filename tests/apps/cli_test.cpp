@@ -2,6 +2,7 @@
 // every subcommand shares, and the plot helpers' loud failures on bad figure data.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -111,6 +112,41 @@ TEST(Cli, MclChecksTheBeaconDetectionsAgainstTheSurvey) {
   int lines = 0;
   for (std::string line; std::getline(csv, line);) ++lines;
   EXPECT_EQ(lines, 1 + j["detections_total"].get<int>());
+}
+
+// `implicit slam` exposes the filters' laser model and association: the JSON echoes what the
+// filter used, 0 means the spec's value (bit-identical to leaving the option out), a given
+// value reaches the filter (the estimate changes), a negative one is a usage error.
+TEST(Cli, SlamSensorNoiseGateAndNewLandmarkDensityReachTheFilter) {
+  const std::string base = "slam --method fastslam1 -M 10 --datasets 1 --json --quiet";
+  const auto d = run_cli(base);
+  ASSERT_EQ(d.code, 0) << d.err;
+  const auto jd = nlohmann::json::parse(d.out);
+  constexpr double kPi = 3.14159265358979323846;
+  EXPECT_NEAR(jd["range_sd_m"].get<double>(), std::sqrt(0.05), 1e-12);
+  EXPECT_NEAR(jd["bearing_sd_deg"].get<double>(), std::sqrt(0.05 * kPi / 180.0) * 180.0 / kPi,
+              1e-12);
+  EXPECT_EQ(jd["gate_chi2"].get<double>(), 9.21);
+  EXPECT_NEAR(jd["new_landmark_density"].get<double>(), 1.0 / (15.0 * kPi), 1e-15);
+
+  const auto z = run_cli(base + " --range-sd 0 --bearing-sd 0 --gate-chi2 0");
+  ASSERT_EQ(z.code, 0) << z.err;
+  EXPECT_EQ(nlohmann::json::parse(z.out)["map_shape_m"], jd["map_shape_m"]);
+
+  const auto c = run_cli(base +
+                         " --association ml --range-sd 0.5 --bearing-sd 3 --gate-chi2 16 "
+                         "--new-landmark-density 0.01");
+  ASSERT_EQ(c.code, 0) << c.err;
+  const auto jc = nlohmann::json::parse(c.out);
+  EXPECT_EQ(jc["range_sd_m"].get<double>(), 0.5);
+  EXPECT_NEAR(jc["bearing_sd_deg"].get<double>(), 3.0, 1e-12);
+  EXPECT_EQ(jc["gate_chi2"].get<double>(), 16.0);
+  EXPECT_EQ(jc["new_landmark_density"].get<double>(), 0.01);
+  EXPECT_NE(jc["map_shape_m"], jd["map_shape_m"]);
+
+  const auto bad = run_cli(base + " --range-sd -1");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("--range-sd"), std::string::npos) << bad.err;
 }
 
 // python/plots/common.py: missing file, missing column, bad number and short row each fail with
