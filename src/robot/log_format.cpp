@@ -247,7 +247,8 @@ StepSchedule make_schedule(const RobotLog& log, double start_time, double max_of
   return s;
 }
 
-TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule) {
+TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule, double max_gap) {
+  require(max_gap > 0.0, "interpolate_truth: expected a positive maximum gap, got {} s", max_gap);
   TruthTrack track;
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const auto& tr = log.truth;
@@ -264,9 +265,11 @@ TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule) 
       } else {
         const TruthRecord& b = *it;
         const TruthRecord& a = *(it - 1);
-        const double s = (t - a.time) / (b.time - a.time);
-        p = (1.0 - s) * a.position + s * b.position;
-        if (a.heading && b.heading) h = *a.heading + s * wrap_angle(*b.heading - *a.heading);
+        if (b.time - a.time <= max_gap) {
+          const double s = (t - a.time) / (b.time - a.time);
+          p = (1.0 - s) * a.position + s * b.position;
+          if (a.heading && b.heading) h = *a.heading + s * wrap_angle(*b.heading - *a.heading);
+        }
       }
     }
     track.position.push_back(p);

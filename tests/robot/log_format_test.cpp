@@ -139,6 +139,27 @@ TEST(RobotLog, ScheduleAndTruthInterpolation) {
   EXPECT_TRUE(std::isnan(t.heading[0]));  // one neighbour has no heading
 }
 
+// A GPS outage: fixes at 0 and 0.2 s, then none until 10 s. Steps inside the short interval are
+// interpolated; a step in the outage has no truth (a straight line is not where the vehicle
+// was), unless the caller allows a longer gap.
+TEST(RobotLog, TruthIsNotInterpolatedAcrossOutages) {
+  const RobotLog log = parse(R"(initial 0.0 0 0 0 0.1 0.1 0.02
+control 0.1 1.0 0.0
+control 5.0 1.0 0.0
+truth 0.0 0.0 0.0
+truth 0.2 0.2 0.0
+truth 10.0 10.0 0.0
+)");
+  const StepSchedule s = make_schedule(log, 0.0, 0.0125);
+  ASSERT_EQ(s.steps.size(), 2u);
+  const TruthTrack t = interpolate_truth(log, s);
+  EXPECT_NEAR(t.position[0](0), 0.1, 1e-12);
+  EXPECT_TRUE(std::isnan(t.position[1](0)));
+  const TruthTrack loose = interpolate_truth(log, s, 60.0);
+  EXPECT_NEAR(loose.position[1](0), 5.0, 1e-12);
+  EXPECT_THROW(interpolate_truth(log, s, 0.0), InvalidArgument);
+}
+
 struct BadCase {
   const char* text;
   const char* expected;  // substring of the message

@@ -99,12 +99,15 @@ struct StepSchedule {
 StepSchedule make_schedule(const RobotLog& log, double start_time, double max_offset);
 
 /// Ground truth at each step time, interpolated linearly between truth records; NaN outside
-/// their time range. Heading is interpolated along the shorter arc and is NaN where either
-/// neighbour has no heading.
+/// their time range and inside gaps longer than max_gap seconds (a straight line across a GPS
+/// outage is not where the vehicle was: Victoria Park has 41 outages over 5 s, up to 58 s).
+/// Heading is interpolated along the shorter arc and is NaN where either neighbour has none.
 struct TruthTrack {
   std::vector<Vec<2>> position;
   std::vector<double> heading;
 };
-TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule);
+inline constexpr double kDefaultTruthMaxGap = 1.0;  ///< [s]; five periods of a 5 Hz GPS
+TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule,
+                             double max_gap = kDefaultTruthMaxGap);
 
 }  // namespace implicit::robot
