@@ -186,8 +186,8 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   bar.finish();
   const double cpu = cpu_seconds() - cpu0;
 
-  std::vector<double> err, err_al, rmse_p, rmse_h, rmse_m, shape, ess, res, nees, lms, mapbytes,
-      newton;
+  std::vector<double> err, err_al, rmse_p, rmse_pa, rmse_h, rmse_m, shape, ess, res, nees, lms,
+      mapbytes, newton;
   std::size_t steps = 0, skipped = 0;
   for (std::size_t i = 0; i < k_runs; ++i) {
     const auto& m = metrics[i];
@@ -195,6 +195,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     err.push_back(m.error_percent);
     err_al.push_back(m.error_aligned_percent);
     rmse_p.push_back(m.rmse_pose_m);
+    rmse_pa.push_back(m.rmse_pose_aligned_m);
     rmse_h.push_back(m.rmse_heading_rad);
     rmse_m.push_back(m.rmse_map_m);
     shape.push_back(m.map_shape_m);
@@ -233,6 +234,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["ess_mean"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(ess));
   j["resamplings"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(res));
   j["rmse_pose_m"] = mean(rmse_p);
+  j["rmse_pose_aligned_m"] = mean(rmse_pa);
   j["rmse_heading_rad"] = mean(rmse_h);
   j["rmse_map_m"] = mean(rmse_m);
   j["landmarks_mean"] = mean(lms);

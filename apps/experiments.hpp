@@ -80,8 +80,9 @@ struct SlamSettings {
   double new_landmark_density = 0.0;  ///< p0 [1/(m rad)]
 };
 /// Keys: method, particles, datasets, error_percent_mean/std, error_aligned_percent_mean,
-/// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_map_m, nees_mean (consistent mode),
-/// cpu_ms_per_step, peak_memory_mb, seconds. CSV: slam_<method>_M<particles>_{path,map}.csv.
+/// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_pose_aligned_m, rmse_map_m, nees_mean
+/// (consistent mode), cpu_ms_per_step, peak_memory_mb, seconds. CSV:
+/// slam_<method>_M<particles>_{path,map}.csv.
 nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx);
 
 }  // namespace implicit::app

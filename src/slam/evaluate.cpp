@@ -151,6 +151,7 @@ SlamMetrics evaluate(const SlamDataset& data, const SlamRun& run) {
     for (std::size_t i = 0; i < path_est.size(); ++i)
       an += (align.apply(path_est[i]) - path_true[i]).squaredNorm();
     m.error_aligned_percent = 100.0 * std::sqrt(an) / std::sqrt(den);
+    m.rmse_pose_aligned_m = std::sqrt(an / static_cast<double>(count));
   }
   return m;
 }

@@ -219,6 +219,34 @@ TEST(SlamMetrics, MapShapeIsZeroForARigidlyMovedMap) {
   EXPECT_NEAR(m.alignment_angle_rad, -0.2, 1e-12);
 }
 
+TEST(SlamMetrics, WithoutATrueMapThePathIsAlignedOnItsOwn) {
+  // Real data (GPS, no surveyed map): a path that is the truth rotated and shifted has no error
+  // after alignment, while the raw error is the shift and rotation.
+  SlamDataset d;
+  SlamDatasetBuilder b(d);
+  d.initial_pose = Pose(0, 0, 0);
+  d.truth = {Pose(0, 0, 0)};
+  for (int n = 1; n <= 20; ++n) {
+    b.begin_step(Control(1, 0));
+    d.truth.push_back(Pose(n, 0.1 * n * n, 0));
+  }
+  d.truth_has_heading = false;
+  SlamRun run;
+  Mat<2> r;
+  r << std::cos(0.3), -std::sin(0.3), std::sin(0.3), std::cos(0.3);
+  for (const Pose& t : d.truth) {
+    Pose e = t;
+    e.head<2>() = r * t.head<2>() + Vec<2>(-4, 2);
+    run.path.push_back(e);
+  }
+  run.path_cov.assign(d.truth.size(), Mat<3>::Identity());
+  const SlamMetrics m = evaluate(d, run);
+  EXPECT_LT(m.rmse_pose_aligned_m, 1e-9);
+  EXPECT_LT(m.error_aligned_percent, 1e-9);
+  EXPECT_GT(m.rmse_pose_m, 4.0);
+  EXPECT_NEAR(m.alignment_angle_rad, -0.3, 1e-12);
+}
+
 }  // namespace
 }  // namespace implicit::slam
 

@@ -55,6 +55,7 @@ struct SlamMetrics {
   double error_percent = 0.0;
   double error_aligned_percent = 0.0;
   double rmse_pose_m = 0.0;
+  double rmse_pose_aligned_m = 0.0;  ///< position RMSE after the alignment (as error_aligned)
   double rmse_heading_rad = 0.0;
   double rmse_map_m = 0.0;
   double map_shape_m = 0.0;
