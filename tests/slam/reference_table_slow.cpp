@@ -34,8 +34,7 @@ struct Row {
   bool particles = true;                          // false: EKF-SLAM (no ESS, no resampling)
 };
 
-using Sample = implicit::testing::RunSummary;
-Sample summarise(const std::vector<double>& v) { return implicit::testing::summarise_runs(v); }
+using implicit::testing::summarise_runs;
 
 SlamOptions options_m100(SlamMethod method, std::uint64_t seed) {
   SlamOptions opt;
@@ -61,16 +60,15 @@ void check_against_table(const Row& row, std::size_t datasets) {
         resamplings[i] = static_cast<double>(run.stats.resamplings);
       },
       1);
-  const Sample s = summarise(shape);
-  const double n = static_cast<double>(datasets);
-  const double se = std::sqrt(s.sd * s.sd / n + s.sd * s.sd / 50.0);
+  const auto s = summarise_runs(shape);
+  const double se = std::sqrt(s.se * s.se + s.sd * s.sd / 50.0);
   std::string what = fmt::format(
       "{} over {} data sets: map shape {:.4f} m (sd {:.4f}), table {:.3f}, |difference| {:.4f} m, "
       "4.5 combined SE {:.4f} m",
       to_string(row.method), datasets, s.mean, s.sd, row.map_shape_m,
       std::abs(s.mean - row.map_shape_m), 4.5 * se);
   if (row.particles) {
-    const Sample e = summarise(ess), r = summarise(resamplings);
+    const auto e = summarise_runs(ess), r = summarise_runs(resamplings);
     what += fmt::format("; ESS/M {:.4f}, table {:.3f}; resamplings {:.1f}, table {:.0f}", e.mean,
                         row.ess_fraction, r.mean, row.resamplings);
     EXPECT_LE(std::abs(e.mean - row.ess_fraction), 0.03 * row.ess_fraction) << what;
@@ -110,9 +108,8 @@ TEST(SlamReferenceTableSlow, FastSlam1AgreesWithIndependentImplementation) {
         shape[i] = evaluate(d, run).map_shape_m;
       },
       1);
-  const Sample s = summarise(shape);
-  const double se =
-      std::sqrt(s.sd * s.sd / static_cast<double>(shape.size()) + kNumpySe * kNumpySe);
+  const auto s = summarise_runs(shape);
+  const double se = std::sqrt(s.se * s.se + kNumpySe * kNumpySe);
   const std::string what = fmt::format(
       "fastslam1 on the reference data sets, {} runs: map shape {:.4f} m (sd {:.4f}); numpy "
       "{:.4f} +- {:.4f} m; |difference| {:.4f}, 4.5 combined SE {:.4f}",
