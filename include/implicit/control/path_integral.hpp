@@ -564,6 +564,9 @@ struct RestrictedPath {
     return f.evaluate_along(base, dir, lambda, slope);
   }
 };
+// Written out because clang before 17 does not deduce aggregate template arguments.
+template <typename PathF, typename Inside>
+RestrictedPath(const PathF&, Inside) -> RestrictedPath<PathF, Inside>;
 
 /// The random map's scalar equation F(mu + lambda d) = target along one ray (spec §1.3): bracket
 /// [0, hi] with hi doubled from sqrt(rho), then Newton safeguarded by bisection, to 1e-12
