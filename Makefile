@@ -4,8 +4,22 @@ BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 OUT ?= out
 CMAKE_FLAGS ?=
+# The sanitizer and fuzzing build (clang++ 14, ASan + UBSan, libFuzzer): docs/design.md, "Reliability".
+SANITIZE_DIR ?= build-sanitize
+SANITIZE_CXX ?= clang++-14
+# What the clang build compiles (the slow test programs are left out: ctest -LE slow does not run
+# them), and the ctest labels it leaves out. Tests of targets not built are not run (ctest's
+# *_NOT_BUILT placeholders), so a narrower list, e.g. SANITIZE_TARGETS="implicit_cli test_core",
+# checks a part.
+FUZZ_TARGETS = robot_log carpark slam_data results_json
+SANITIZE_TARGETS ?= implicit_cli test_core test_filter test_control test_robot test_slam test_apps \
+	$(addprefix fuzz_,$(FUZZ_TARGETS))
+SANITIZE_EXCLUDE ?= slow|packaging
+# Each fuzz target runs this many seconds in `make fuzz-smoke`.
+FUZZ_SECONDS ?= 25
 
-.PHONY: all deps configure build test test-slow reproduce reproduce-quick bench format clean
+.PHONY: all deps configure build test test-slow reproduce reproduce-quick bench format clean \
+	configure-sanitize test-sanitize fuzz-smoke
 
 all: build
 
@@ -24,6 +38,38 @@ test: build
 test-slow: build
 	@ctest --test-dir $(BUILD_DIR) -L slow --output-on-failure -j $(JOBS)
 
+# -O1 keeps the instrumented tests fast enough; assertions stay on (no NDEBUG). The packaging test
+# is left out: its consumer is built with the default compiler, which cannot link an instrumented
+# library, and `make test` runs it.
+configure-sanitize: deps
+	@CXX=$(SANITIZE_CXX) cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=Sanitize \
+	  -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -gline-tables-only" -DIMPLICIT_SANITIZE=ON \
+	  -DIMPLICIT_BUILD_FUZZERS=ON -DIMPLICIT_BUILD_BENCHMARKS=OFF -DIMPLICIT_BUILD_PYTHON=OFF \
+	  -DIMPLICIT_BUILD_EXAMPLES=OFF $(CMAKE_FLAGS) > /dev/null
+
+test-sanitize: configure-sanitize
+	@cmake --build $(SANITIZE_DIR) -j $(JOBS) --target $(SANITIZE_TARGETS)
+	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --test-dir $(SANITIZE_DIR) -LE "$(SANITIZE_EXCLUDE)" -E "_NOT_BUILT$$" \
+	  --output-on-failure -j $(JOBS)
+
+# Each target from its seed corpus (fuzz/corpus/NAME, read only; new inputs go to
+# $(SANITIZE_DIR)/fuzz-corpus/NAME) for FUZZ_SECONDS; any crash, sanitizer report, leak or
+# timeout fails, and the input is saved in $(SANITIZE_DIR)/fuzz-artifacts/.
+fuzz-smoke: configure-sanitize
+	@cmake --build $(SANITIZE_DIR) -j $(JOBS) --target $(addprefix fuzz_,$(FUZZ_TARGETS))
+	@mkdir -p $(SANITIZE_DIR)/fuzz-artifacts
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p $(SANITIZE_DIR)/fuzz-corpus/$$t; \
+	  echo "fuzz-smoke: $$t for $(FUZZ_SECONDS) s"; \
+	  $(SANITIZE_DIR)/fuzz/fuzz_$$t $(SANITIZE_DIR)/fuzz-corpus/$$t fuzz/corpus/$$t \
+	    -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+	    -artifact_prefix=$(SANITIZE_DIR)/fuzz-artifacts/$$t- -print_final_stats=1 \
+	    2> $(SANITIZE_DIR)/fuzz-artifacts/$$t.log \
+	  || { tail -n 60 $(SANITIZE_DIR)/fuzz-artifacts/$$t.log; exit 1; }; \
+	  grep -E "^#[0-9]+ +DONE|stat::number_of_executed_units" $(SANITIZE_DIR)/fuzz-artifacts/$$t.log; \
+	done
+
 reproduce: build
 	@$(BUILD_DIR)/apps/implicit reproduce --out $(OUT)
 
@@ -37,4 +83,4 @@ format:
 	@find include src apps examples bench tests python -name '*.hpp' -o -name '*.cpp' | xargs clang-format -i
 
 clean:
-	@rm -rf $(BUILD_DIR)
+	@rm -rf $(BUILD_DIR) $(SANITIZE_DIR)

@@ -1,0 +1,36 @@
+// Fuzz target: results.json as `implicit reproduce --report-only` reads it (apps/report.cpp,
+// apps/report_content.cpp): parse, build the report, render Markdown and HTML, write the tables.
+//
+// Malformed or wrongly typed JSON must end in an exception that `implicit` turns into an error
+// message and exit 1: ParseError, InvalidArgument, or one of nlohmann::json's own exceptions.
+// Anything else (std::bad_alloc, another exception, a crash, a sanitizer report, a hang) is a
+// finding.
+
+#include <cstdint>
+
+#include <nlohmann/json.hpp>
+
+#include "implicit/core/error.hpp"
+#include "report.hpp"
+#include "scratch.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  namespace report = implicit::app::report;
+  nlohmann::json results;
+  try {
+    results = nlohmann::json::parse(data, data + size);
+  } catch (const nlohmann::json::parse_error&) {
+    return 0;
+  }
+  const auto& dir = implicit::fuzz::scratch().path();
+  try {
+    const report::Document doc = report::build_report(results, dir / "report");
+    (void)doc.markdown();
+    (void)doc.html("Reproduction report");
+    report::write_table_csvs(results, dir / "tables");
+  } catch (const implicit::ParseError&) {
+  } catch (const implicit::InvalidArgument&) {
+  } catch (const nlohmann::json::exception&) {
+  }
+  return 0;
+}
