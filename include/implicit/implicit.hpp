@@ -1,5 +1,14 @@
 #pragma once
-// Convenience header: the implicit sampling core.
+// Everything: the whole public library, every layer (core, control, robot, filter, slam).
+// Including a layer's own headers instead compiles faster; tests/docs checks that this list is
+// complete.
+#include "implicit/control/double_slit.hpp"
+#include "implicit/control/himmelblau.hpp"
+#include "implicit/control/normal_tail.hpp"
+#include "implicit/control/path_integral.hpp"
+#include "implicit/control/robot_arm.hpp"
+#include "implicit/core/banded.hpp"
+#include "implicit/core/error.hpp"
 #include "implicit/core/implicit_sampler.hpp"
 #include "implicit/core/jet.hpp"
 #include "implicit/core/laplace.hpp"
@@ -14,3 +23,22 @@
 #include "implicit/core/types.hpp"
 #include "implicit/core/version.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/filter/localization.hpp"
+#include "implicit/filter/mcl_objective.hpp"
+#include "implicit/filter/particle_filter.hpp"
+#include "implicit/filter/proposals.hpp"
+#include "implicit/robot/carpark.hpp"
+#include "implicit/robot/csv_table.hpp"
+#include "implicit/robot/data_association.hpp"
+#include "implicit/robot/landmark_map.hpp"
+#include "implicit/robot/log_format.hpp"
+#include "implicit/robot/models.hpp"
+#include "implicit/robot/range_bearing.hpp"
+#include "implicit/robot/ute_model.hpp"
+#include "implicit/slam/dataset.hpp"
+#include "implicit/slam/ekf_slam.hpp"
+#include "implicit/slam/evaluate.hpp"
+#include "implicit/slam/landmark_index.hpp"
+#include "implicit/slam/landmark_map.hpp"
+#include "implicit/slam/proposals.hpp"
+#include "implicit/slam/slam_filter.hpp"

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/cli_runner.hpp"
+#include "implicit/core/version.hpp"
 
 namespace {
 
@@ -63,6 +64,7 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
                           "hardware_threads", "threads", "seed", "quick", "command", "settings",
                           "experiments", "figures", "paper", "reference", "seconds_total"})
     EXPECT_TRUE(results.contains(key)) << key;
+  EXPECT_EQ(results["version"], implicit::version());  // the project(VERSION) of CMakeLists.txt
   EXPECT_EQ(results["quick"], true);
   EXPECT_EQ(results["seed"], 1);
   EXPECT_EQ(results["threads"], 2);

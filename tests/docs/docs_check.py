@@ -1,0 +1,260 @@
+#!/usr/bin/env python3
+"""Checks that keep the documentation honest (run by ctest, see tests/docs/CMakeLists.txt).
+
+  extract    write every complete C++/Python program of README.md and docs/*.md to a folder, with
+             its expected output, and a manifest CMake turns into one executable and one test each
+  run        run one extracted program and compare what it prints with the output the doc states
+  citations  every "spec §x.y" cited in the sources and docs is a heading of docs/specification.md,
+             and every erratum "E<n>" cited is one the specification lists
+  umbrella   implicit/implicit.hpp includes every public header
+  versions   CMakeLists.txt, CITATION.cff, CHANGELOG.md and `implicit --version` name one version
+
+The conventions for authors are in docs/design.md, "Tested documentation":
+  ```cpp                        a complete program: compiled, linked with implicit::implicit, run
+  ```cpp fragment               a piece of a program: not compiled
+  ```output                     what the program just above prints, compared exactly
+  ```output tolerance=1e-3      ... every number within 1e-3 * max(1, |expected|), text exactly
+The same holds for ```python blocks (run with the built Python module on PYTHONPATH), and a
+```robot-log block (docs/formats.md) is run through `implicit mcl --data` and must be scored.
+"""
+import argparse
+import json
+import pathlib
+import re
+import subprocess
+import sys
+
+PROGRAM_LANGUAGES = {"cpp": "cpp", "c++": "cpp", "python": "py", "py": "py", "robot-log": "txt"}
+FENCE = re.compile(r"^(```+)\s*([^\s`]*)\s*(.*)$")
+NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+
+
+def fenced_blocks(path):
+    """Yields (line, language, flags, text) for every fenced block of a Markdown file."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    i = 0
+    while i < len(lines):
+        m = FENCE.match(lines[i])
+        if not m or "`" in m.group(3):  # a backtick in the info string: inline code, no fence
+            i += 1
+            continue
+        fence, language, flags = m.group(1), m.group(2).lower(), m.group(3).split()
+        start, body = i + 1, []
+        i += 1
+        while i < len(lines) and not lines[i].startswith(fence):
+            body.append(lines[i])
+            i += 1
+        if i == len(lines):
+            sys.exit(f"{path}:{start}: unterminated ``` block")
+        i += 1
+        yield start, language, flags, "\n".join(body) + "\n"
+
+
+def parse_tolerance(path, line, flags):
+    for flag in flags:
+        if flag.startswith("tolerance="):
+            try:
+                return float(flag.split("=", 1)[1])
+            except ValueError:
+                sys.exit(f"{path}:{line}: expected tolerance=<number>, got '{flag}'")
+    return 0.0
+
+
+def write_if_changed(path, text):
+    # Unchanged snippets keep their time stamp, so the build does not recompile them.
+    if not path.exists() or path.read_text(encoding="utf-8") != text:
+        path.write_text(text, encoding="utf-8")
+
+
+def extract(args):
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    root = pathlib.Path(args.root)
+    manifest = []
+    for doc in args.docs:
+        path = pathlib.Path(doc)
+        origin = path.resolve().relative_to(root.resolve()).as_posix()
+        current = None  # the last program, waiting for its ```output block
+        ordinal = 0
+        for line, language, flags, text in fenced_blocks(path):
+            if language in PROGRAM_LANGUAGES:
+                current = None
+                if "fragment" in flags:
+                    continue
+                # Numbered within the file, so that editing one doc renames no other's targets.
+                ordinal += 1
+                name = f"doc_{re.sub(r'[^A-Za-z0-9]+', '_', path.stem).lower()}_{ordinal}"
+                source = out / f"{name}.{PROGRAM_LANGUAGES[language]}"
+                prefix = "// " if PROGRAM_LANGUAGES[language] == "cpp" else "# "
+                write_if_changed(source, f"{prefix}{origin}:{line}\n{text}")
+                current = {"name": name, "source": source, "language": PROGRAM_LANGUAGES[language],
+                           "origin": f"{origin}:{line}", "expected": "", "tolerance": 0.0}
+                manifest.append(current)
+            elif language == "output":
+                if current is None:
+                    sys.exit(f"{origin}:{line}: an ```output block must follow a program block")
+                expected = out / f"{current['name']}.expected"
+                write_if_changed(expected, text)
+                current["expected"] = expected
+                current["tolerance"] = parse_tolerance(origin, line, flags)
+                current = None
+    rows = [f"{m['name']}|{m['source']}|{m['language']}|{m['origin']}|{m['expected']}|"
+            f"{m['tolerance']:g}" for m in manifest]
+    write_if_changed(pathlib.Path(args.manifest), "\n".join(rows) + "\n")
+
+
+def outputs_agree(got, expected, tolerance):
+    """Exact text; with a tolerance, the numbers may differ by tolerance * max(1, |expected|)."""
+    if tolerance == 0.0:
+        return got == expected
+    if NUMBER.sub("#", got) != NUMBER.sub("#", expected):
+        return False
+    for a, b in zip(NUMBER.findall(got), NUMBER.findall(expected)):
+        if abs(float(a) - float(b)) > tolerance * max(1.0, abs(float(b))):
+            return False
+    return True
+
+
+def run(args):
+    result = subprocess.run(args.command, capture_output=True, text=True, timeout=args.timeout)
+    sys.stderr.write(result.stderr)
+    if result.returncode != 0:
+        print(f"{args.origin}: the program exited with {result.returncode}:\n{result.stdout}")
+        return 1
+    if args.expected:
+        expected = pathlib.Path(args.expected).read_text(encoding="utf-8")
+        if not outputs_agree(result.stdout, expected, args.tolerance):
+            print(f"{args.origin}: the program prints\n{result.stdout}\n"
+                  f"but the doc says (tolerance {args.tolerance:g})\n{expected}")
+            return 1
+    if args.positive:
+        # A JSON report whose listed numbers must be > 0: a run that used no detection or scored
+        # no step has not shown that the example works.
+        try:
+            report = json.loads(result.stdout)
+        except json.JSONDecodeError as e:
+            print(f"{args.origin}: expected JSON on stdout, got {e}:\n{result.stdout}")
+            return 1
+        for key in args.positive:
+            value = report.get(key)
+            if not isinstance(value, (int, float)) or not value > 0:
+                print(f"{args.origin}: expected '{key}' > 0 in the JSON report, got {value}")
+                return 1
+    print(f"{args.origin}: ok")
+    return 0
+
+
+HEADING = re.compile(r"^#{1,6}\s+(\d+(?:\.\d+)*)\.?\s")
+ERRATUM = re.compile(r"^\s*[-*]?\s*\*\*(E\d+)\*\*")
+# "spec §2.4", "specification §3.5", "docs/specification.md §3.5", then ", §3.6" or "–3.7" lists.
+CITATION = re.compile(r"\bspec(?:ification)?(?:\.md)?\s*§\s*(\d+(?:\.\d+)*)((?:\s*(?:,|–|-|and)\s*§?\s*\d+(?:\.\d+)*)*)")
+ERRATUM_CITED = re.compile(r"(?<![\w.])E(\d+)(?:\s*[–-]\s*E?(\d+))?\b")
+NOT_AN_ERRATUM = re.compile(r"noqa[:\s]+[A-Z0-9, ]*$")
+
+
+def spec_contents(spec):
+    sections, errata = set(), set()
+    for line in spec.read_text(encoding="utf-8").splitlines():
+        if m := HEADING.match(line):
+            sections.add(m.group(1))
+        if m := ERRATUM.match(line):
+            errata.add(m.group(1))
+    return sections, errata
+
+
+def citations(args):
+    root = pathlib.Path(args.root)
+    sections, errata = spec_contents(root / "docs" / "specification.md")
+    files = [root / "README.md"]
+    for folder in ("include", "src", "apps", "tests", "python", "docs", "examples", "bench"):
+        files += [p for p in sorted((root / folder).rglob("*"))
+                  if p.suffix in (".hpp", ".cpp", ".py", ".md", ".txt", ".cmake", ".in")]
+    problems, count = [], 0
+    for path in files:
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            where = f"{path.relative_to(root)}:{number}"
+            for m in CITATION.finditer(line):
+                cited = [m.group(1)] + re.findall(r"\d+(?:\.\d+)*", m.group(2))
+                for section in cited:
+                    count += 1
+                    if section not in sections:
+                        problems.append(f"{where}: cites spec §{section}, not a heading of "
+                                        f"docs/specification.md")
+            for m in ERRATUM_CITED.finditer(line):
+                if NOT_AN_ERRATUM.search(line[:m.start()]):
+                    continue
+                first = int(m.group(1))
+                last = int(m.group(2)) if m.group(2) else first
+                for n in {first, last}:
+                    count += 1
+                    if f"E{n}" not in errata:
+                        problems.append(f"{where}: cites erratum E{n}, which docs/specification.md "
+                                        f"does not list")
+    for p in problems:
+        print(p)
+    print(f"{count} citations checked against {len(sections)} sections and {len(errata)} errata; "
+          f"{len(problems)} unresolved")
+    return 1 if problems or not sections or not errata else 0
+
+
+def umbrella(args):
+    include = pathlib.Path(args.root) / "include"
+    top = include / "implicit" / "implicit.hpp"
+    included = set(re.findall(r'#include\s+"([^"]+)"', top.read_text(encoding="utf-8")))
+    headers = {p.relative_to(include).as_posix() for p in include.rglob("*.hpp")
+               if p != top and "detail" not in p.parts}
+    missing = sorted(headers - included)
+    for h in missing:
+        print(f"include/implicit/implicit.hpp: does not include \"{h}\"")
+    print(f"{len(headers)} public headers, {len(missing)} missing from implicit/implicit.hpp")
+    return 1 if missing else 0
+
+
+def versions(args):
+    root = pathlib.Path(args.root)
+    found = {}
+    m = re.search(r"project\(implicit\s+VERSION\s+([0-9.]+)", (root / "CMakeLists.txt").read_text())
+    found["CMakeLists.txt project(VERSION)"] = m.group(1) if m else None
+    m = re.search(r"^version:\s*\"?([0-9.]+)", (root / "CITATION.cff").read_text(), re.M)
+    found["CITATION.cff version"] = m.group(1) if m else None
+    # The newest section of the changelog is the first heading that names a version.
+    m = re.search(r"^## .*?(\d+\.\d+\.\d+)", (root / "CHANGELOG.md").read_text(), re.M)
+    found["CHANGELOG.md newest section"] = m.group(1) if m else None
+    if args.cli:
+        out = subprocess.run([args.cli, "--version"], capture_output=True, text=True).stdout
+        m = re.match(r"implicit (\d+\.\d+\.\d+) ", out)
+        found["implicit --version"] = m.group(1) if m else None
+    for where, version in found.items():
+        print(f"{where}: {version}")
+    return 0 if None not in found.values() and len(set(found.values())) == 1 else 1
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command_name", required=True)
+    p = sub.add_parser("extract")
+    p.add_argument("--root", required=True)
+    p.add_argument("--out", required=True)
+    p.add_argument("--manifest", required=True)
+    p.add_argument("docs", nargs="+")
+    p = sub.add_parser("run")
+    p.add_argument("--origin", required=True)
+    p.add_argument("--expected", default="")
+    p.add_argument("--tolerance", type=float, default=0.0)
+    p.add_argument("--timeout", type=float, default=120.0)
+    p.add_argument("--positive", action="append", default=[], metavar="KEY",
+                   help="the program prints JSON whose number KEY must be > 0 (repeatable)")
+    p.add_argument("command", nargs="+")
+    for name in ("citations", "umbrella", "versions"):
+        p = sub.add_parser(name)
+        p.add_argument("--root", required=True)
+    p.add_argument("--cli", default="", help="the implicit executable, whose --version is checked")
+    args = parser.parse_args()
+    if args.command_name == "extract":
+        return extract(args) or 0
+    return {"run": run, "citations": citations, "umbrella": umbrella,
+            "versions": versions}[args.command_name](args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
