@@ -2,9 +2,18 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/version.hpp"
 
 namespace implicit::app {
 
@@ -74,19 +83,121 @@ std::filesystem::path RunContext::csv_path(const std::string& name) const {
   return out_dir / name;
 }
 
-}  // namespace implicit::app
+OutputFile::OutputFile(std::filesystem::path path, Mode mode) : path_(std::move(path)) {
+  // Same folder, so that the rename is atomic; the pid keeps concurrent runs apart.
+  temporary_ = path_;
+  temporary_ += fmt::format(".tmp{}", ::getpid());
+  std::error_code ec;
+  fresh_ = !std::filesystem::exists(path_, ec);
+  if (mode == Mode::kAppend && !fresh_)
+    std::filesystem::copy_file(path_, temporary_, std::filesystem::copy_options::overwrite_existing,
+                               ec);
+  out_ = std::make_unique<std::ofstream>(
+      temporary_, mode == Mode::kAppend && !fresh_ ? std::ios::app : std::ios::trunc);
+}
 
-#include <CLI/CLI.hpp>
+OutputFile::~OutputFile() {
+  if (committed_) return;
+  out_.reset();
+  std::error_code ec;
+  std::filesystem::remove(temporary_, ec);
+}
 
-namespace implicit::app {
+std::ostream& OutputFile::stream() { return *out_; }
+
+void OutputFile::commit() {
+  out_->flush();
+  const bool written = static_cast<bool>(*out_);
+  out_->close();
+  std::error_code ec;
+  if (written && !out_->fail()) std::filesystem::rename(temporary_, path_, ec);
+  if (!written || out_->fail() || ec) {
+    std::filesystem::remove(temporary_, ec);
+    throw InvalidArgument(fmt::format("{}: expected a writable output file, got a failed write{}",
+                                      path_.string(), ec ? " (" + ec.message() + ")" : ""));
+  }
+  committed_ = true;
+}
+
+void print_json(nlohmann::json result) {
+  result["version"] = implicit::version();
+  result["commit"] = implicit::git_commit();
+  fmt::print("{}\n", result.dump(2));
+}
+
+void require_scored(const nlohmann::json& result, const std::string& command,
+                    const std::vector<std::string>& finite,
+                    const std::vector<std::string>& positive, bool allow_empty) {
+  std::vector<std::string> missing;
+  for (const auto& key : finite) {
+    const auto it = result.find(key);
+    if (it == result.end() || !it->is_number() || !std::isfinite(it->get<double>()))
+      missing.push_back(key + " is not a finite number");
+  }
+  for (const auto& key : positive) {
+    const auto it = result.find(key);
+    if (it == result.end() || !it->is_number() || !(it->get<double>() > 0.0))
+      missing.push_back(key + " is 0");
+  }
+  if (missing.empty()) return;
+  std::string list;
+  for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
+  fmt::print(
+      stderr, "implicit {}: warning: the run scored nothing: {}{}\n", command, list,
+      allow_empty ? " (allowed by --allow-empty)" : "; exit code 1 (--allow-empty allows it)");
+  if (!allow_empty) throw CLI::RuntimeError(1);
+}
+
+CLI::Validator in_range(int lo, int hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        const char* begin = text.c_str();
+        char* end = nullptr;
+        errno = 0;
+        const long long v = std::strtoll(begin, &end, 10);
+        if (text.empty() || end != begin + text.size() || errno == ERANGE)
+          return fmt::format("expected an integer in [{}, {}], got '{}'", lo, hi, printable(text));
+        if (v < lo || v > hi) return fmt::format("expected [{}, {}], got {}", lo, hi, v);
+        return {};
+      },
+      fmt::format("INT in [{} - {}]", lo, hi));
+}
+
+CLI::Validator in_range(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        const char* begin = text.c_str();
+        char* end = nullptr;
+        const double v = std::strtod(begin, &end);
+        if (text.empty() || end != begin + text.size() || !std::isfinite(v))
+          return fmt::format("expected a finite number in [{}, {}], got '{}'", lo, hi,
+                             printable(text));
+        if (v < lo || v > hi) return fmt::format("expected [{}, {}], got {}", lo, hi, v);
+        return {};
+      },
+      fmt::format("FLOAT in [{} - {}]", lo, hi));
+}
+
 void add_common_options(CLI::App& sub, RunContext& ctx) {
+  // Unsigned: "-1" would otherwise wrap to 2^64 - 1 without a word.
   sub.add_option("--seed", ctx.seed, "Random seed (runs with the same seed are bit-identical)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            const bool digits =
+                !text.empty() && text.size() <= 20 &&
+                std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+            errno = 0;
+            if (!digits || (std::strtoull(text.c_str(), nullptr, 10), errno == ERANGE))
+              return fmt::format("expected an integer in [0, 2^64 - 1], got '{}'", printable(text));
+            return {};
+          },
+          "UINT64"))
       ->capture_default_str();
   sub.add_flag("--json", ctx.json, "Print one JSON object on stdout and nothing else");
   auto* out = sub.add_option("--out", ctx.out_dir, "Folder for CSV output (figures, trajectories)");
   if (!ctx.out_dir.empty()) out->capture_default_str();
   sub.add_option("--threads", ctx.threads, "Worker threads (0 = all cores)")
-      ->check(CLI::Range(0, 1024))
+      ->check(in_range(0, 1024))
       ->capture_default_str();
   sub.add_flag("--quiet", ctx.quiet, "No progress output on stderr");
 }
