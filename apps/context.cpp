@@ -1,8 +1,10 @@
 #include "context.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -83,6 +85,73 @@ std::filesystem::path RunContext::csv_path(const std::string& name) const {
   return out_dir / name;
 }
 
+namespace {
+// Temporary files being written, for the signal handler: fixed storage, since a handler may only
+// read memory and call async-signal-safe functions (unlink, write, _exit).
+constexpr int kSlots = 64;
+constexpr std::size_t kPathBytes = 4096;
+char pending_paths[kSlots][kPathBytes];
+std::atomic<bool> pending_used[kSlots];
+std::atomic<int> outputs_completed{0};
+
+int register_pending(const std::filesystem::path& p) {
+  const std::string s = p.string();
+  if (s.size() >= kPathBytes) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    bool expected = false;
+    if (!pending_used[i].load() && pending_used[i].compare_exchange_strong(expected, true)) {
+      std::copy(s.c_str(), s.c_str() + s.size() + 1, pending_paths[i]);
+      return i;
+    }
+  }
+  return -1;  // more than kSlots at once: that file's temporary name may remain after a signal
+}
+
+void release_pending(int slot) {
+  if (slot >= 0) pending_used[slot].store(false);
+}
+
+void write_stderr(const char* text) {
+  std::size_t n = 0;
+  while (text[n] != '\0') ++n;
+  [[maybe_unused]] const auto ignored = ::write(STDERR_FILENO, text, n);
+}
+
+extern "C" void on_stop_signal(int signal) {
+  int removed = 0;
+  for (int i = 0; i < kSlots; ++i)
+    if (pending_used[i].load() && ::unlink(pending_paths[i]) == 0) ++removed;
+  // Digits by hand: snprintf is not async-signal-safe.
+  char number[16];
+  auto digits = [&number](int v) {
+    char tmp[16];
+    int k = 0;
+    do {
+      tmp[k++] = static_cast<char>('0' + v % 10);
+      v /= 10;
+    } while (v > 0 && k < 15);
+    for (int i = 0; i < k; ++i) number[i] = tmp[k - 1 - i];
+    number[k] = '\0';
+    return number;
+  };
+  write_stderr(signal == SIGINT ? "\nimplicit: stopped by SIGINT; "
+                                : "\nimplicit: stopped by SIGTERM; ");
+  write_stderr(digits(outputs_completed.load()));
+  write_stderr(" output file(s) were complete and are kept, ");
+  write_stderr(digits(removed));
+  write_stderr(" unfinished one(s) removed\n");
+  ::_exit(128 + signal);
+}
+}  // namespace
+
+void install_signal_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_stop_signal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
 OutputFile::OutputFile(std::filesystem::path path, Mode mode) : path_(std::move(path)) {
   // Same folder, so that the rename is atomic; the pid keeps concurrent runs apart.
   temporary_ = path_;
@@ -92,6 +161,7 @@ OutputFile::OutputFile(std::filesystem::path path, Mode mode) : path_(std::move(
   if (mode == Mode::kAppend && !fresh_)
     std::filesystem::copy_file(path_, temporary_, std::filesystem::copy_options::overwrite_existing,
                                ec);
+  slot_ = register_pending(temporary_);
   out_ = std::make_unique<std::ofstream>(
       temporary_, mode == Mode::kAppend && !fresh_ ? std::ios::app : std::ios::trunc);
 }
@@ -101,6 +171,7 @@ OutputFile::~OutputFile() {
   out_.reset();
   std::error_code ec;
   std::filesystem::remove(temporary_, ec);
+  release_pending(slot_);
 }
 
 std::ostream& OutputFile::stream() { return *out_; }
@@ -113,10 +184,14 @@ void OutputFile::commit() {
   if (written && !out_->fail()) std::filesystem::rename(temporary_, path_, ec);
   if (!written || out_->fail() || ec) {
     std::filesystem::remove(temporary_, ec);
+    release_pending(slot_);
+    slot_ = -1;
     throw InvalidArgument(fmt::format("{}: expected a writable output file, got a failed write{}",
                                       path_.string(), ec ? " (" + ec.message() + ")" : ""));
   }
   committed_ = true;
+  release_pending(slot_);
+  ++outputs_completed;
 }
 
 void print_json(nlohmann::json result) {

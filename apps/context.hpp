@@ -88,7 +88,12 @@ class OutputFile {
   std::unique_ptr<std::ofstream> out_;
   bool fresh_ = true;
   bool committed_ = false;
+  int slot_ = -1;  ///< where the signal handler finds the temporary name
 };
+
+/// SIGINT and SIGTERM: remove the outputs being written (their temporary files), say on stderr how
+/// many were completed (those are kept), and exit with 128 + the signal number. Called by main().
+void install_signal_handlers();
 
 /// Prints a subcommand's result on stdout as JSON, with the version and commit of this build.
 void print_json(nlohmann::json result);

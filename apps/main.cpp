@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
       "  implicit <subcommand> --help           # options of one subcommand\n"
       "\nExit codes: 0 success, 1 error, 2 bad command line, 3 report written but an experiment "
       "or figure failed.\n");
+  install_signal_handlers();
   try {
     app.parse(argc, argv);
     if (app.get_subcommands().empty()) {

@@ -165,4 +165,18 @@ TEST(Cli, ReportOnlyWithWronglyTypedJsonNamesTheFile) {
   EXPECT_NE(r.err.find((dir.path() / "results.json").string() + ": "), std::string::npos) << r.err;
 }
 
+TEST(Cli, SigtermStopsWithAMessageAndLeavesNoPartialOutput) {
+  TempDir dir("sigterm");
+  const auto r = implicit::test::run_shell(
+      std::string("'") + IMPLICIT_CLI +
+      "' slam --method fastslam2 --datasets 100000 --quiet --out '" + dir.path().string() +
+      "' & pid=$!; sleep 2; kill -TERM $pid; wait $pid");
+  EXPECT_EQ(r.code, 128 + 15) << r.err;
+  EXPECT_NE(r.err.find("implicit: stopped by SIGTERM; 0 output file(s) were complete and are kept"),
+            std::string::npos)
+      << r.err;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ADD_FAILURE() << "left behind: " << entry.path();
+}
+
 }  // namespace
