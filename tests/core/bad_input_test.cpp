@@ -253,7 +253,7 @@ TEST(BadInput, SampleCountBeyondMemoryIsInvalidArgument) {
   const auto f = make_autodiff_target<1>([](const auto& x) { return 0.5 * x(0) * x(0); });
   const auto lp = Laplace<1>::make(Vec<1>(0.0), 0.0, Mat<1>(1.0));
   try {
-    sample_with(f, lp, std::size_t{1} << 60, {.seed = 7});
+    sample_with(f, lp, std::size_t{1} << 61, {.seed = 7});
     ADD_FAILURE() << "no error";
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("expected a number of samples that fits in memory"),

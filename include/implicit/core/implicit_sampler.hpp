@@ -63,9 +63,11 @@ template <int N>
 void allocate(SampleSet<N>& s, int m, std::size_t M) {
   const double gib = static_cast<double>(M) * (m + 2) * sizeof(double) / (1 << 30);
   try {
-    s.x.resize(m, static_cast<Eigen::Index>(M));
+    // The vectors first: beyond their max_size they throw length_error before asking malloc
+    // (a sanitizer's allocator aborts on absurd sizes instead of throwing bad_alloc).
     s.log_weights.assign(M, 0.0);
     s.weights.reserve(M);
+    s.x.resize(m, static_cast<Eigen::Index>(M));
   } catch (const std::exception&) {  // bad_alloc, or length_error beyond a vector's max_size
     throw InvalidArgument(fmt::format(
         "implicit sampling: expected a number of samples that fits in memory, got M = {} "
