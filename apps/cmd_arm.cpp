@@ -17,7 +17,7 @@ void setup_arm(CLI::App& sub) {
     ThreadLimit limit(ctx->threads);
     const auto r = run_arm(ArmSettings{}, *ctx);
     if (ctx->json) {
-      fmt::print("{}\n", r.dump(2));
+      print_json(r);
       return;
     }
     fmt::print(

@@ -18,17 +18,17 @@ struct HimmelblauCommand {
 void setup_himmelblau(CLI::App& sub) {
   auto cmd = std::make_shared<HimmelblauCommand>();
   sub.add_option("--runs", cmd->settings.runs, "Independent controlled runs")
-      ->check(CLI::Range(1, 1000000))
+      ->check(in_range(1, 1000000))
       ->capture_default_str();
   sub.add_option("--samples,-M", cmd->settings.samples, "Samples M per psi estimate")
-      ->check(CLI::Range(1, 1000000))
+      ->check(in_range(1, 1000000))
       ->capture_default_str();
   add_common_options(sub, cmd->ctx);
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     const auto r = run_himmelblau(cmd->settings, cmd->ctx);
     if (cmd->ctx.json) {
-      fmt::print("{}\n", r.dump(2));
+      print_json(r);
       return;
     }
     fmt::print(

@@ -13,6 +13,7 @@ namespace {
 struct MclCommand {
   MclSettings settings;
   RunContext ctx;
+  bool allow_empty = false;
 };
 
 void setup_mcl(CLI::App& sub) {
@@ -22,10 +23,10 @@ void setup_mcl(CLI::App& sub) {
       ->check(CLI::IsMember({"standard", "implicit"}))
       ->capture_default_str();
   sub.add_option("--particles,-M", cmd->settings.particles, "Particles M")
-      ->check(CLI::Range(1, 10000000))
+      ->check(in_range(1, 10000000))
       ->capture_default_str();
   sub.add_option("--runs", cmd->settings.runs, "Runs with different seeds")
-      ->check(CLI::Range(1, 100000))
+      ->check(in_range(1, 100000))
       ->capture_default_str();
   sub.add_option("--data", cmd->settings.data_dir,
                  "A Car Park folder (carpark_*.csv) or a plain-text robot log (docs/formats.md); "
@@ -36,9 +37,9 @@ void setup_mcl(CLI::App& sub) {
       ->capture_default_str();
   sub.add_option("--p", cmd->settings.p,
                  "Control noise P (std of speed [m/s] and steering [rad]); overrides --config")
-      ->check(CLI::Range(0.0, 10.0));
+      ->check(in_range(0.0, 10.0));
   sub.add_option("--q", cmd->settings.q, "State noise q1 = q2 [m] (default 0.1)")
-      ->check(CLI::Range(1e-6, 10.0));
+      ->check(in_range(1e-6, 10.0));
   sub.add_option("--map", cmd->settings.map, "Implicit proposal map: linear or random")
       ->check(CLI::IsMember({"linear", "random"}))
       ->capture_default_str();
@@ -54,22 +55,29 @@ void setup_mcl(CLI::App& sub) {
       ->capture_default_str();
   sub.add_option("--gps-std", cmd->settings.gps_std,
                  "GPS std [m] per coordinate assumed by the reference run")
-      ->check(CLI::Range(1e-3, 100.0))
+      ->check(in_range(1e-3, 100.0))
       ->capture_default_str();
   sub.add_option("--reference-particles", cmd->settings.reference_particles,
                  "Particles of the reference run")
-      ->check(CLI::Range(1, 10000000))
+      ->check(in_range(1, 10000000))
       ->capture_default_str();
   sub.add_flag("--no-clutter{false}", cmd->settings.clutter,
                "Dropped detections contribute nothing (instead of the clutter density p0)");
+  sub.add_flag("--allow-empty", cmd->allow_empty,
+               "Exit 0 even when the run scored nothing (no step with truth, no landmark, a "
+               "non-finite metric); a warning is printed either way");
   add_common_options(sub, cmd->ctx);
   set_examples(sub, {"implicit mcl --method implicit --particles 100 --runs 20 --json",
                      "implicit mcl --method standard --particles 300 --config B --out out/mcl"});
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     const auto r = run_mcl(cmd->settings, cmd->ctx);
+    const auto check = [&] {
+      require_scored(r, "mcl", {"error_percent_mean", "rmse_m"}, {}, cmd->allow_empty);
+    };
     if (cmd->ctx.json) {
-      fmt::print("{}\n", r.dump(2));
+      print_json(r);
+      check();
       return;
     }
     fmt::print(
@@ -82,6 +90,7 @@ void setup_mcl(CLI::App& sub) {
         r["rmse_m"].get<double>(), r["heading_rmse_rad"].get<double>(), r["lost_runs"].get<int>(),
         r["ess_mean"].get<double>(), r["cpu_ms_per_step"].get<double>(),
         r["seconds"].get<double>());
+    check();
   });
 }
 

@@ -253,10 +253,11 @@ std::string folder_name(const std::string& label) {
   return out;
 }
 
+// Atomic: a killed run leaves the previous file, not a half-written one.
 void write_text(const std::filesystem::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary);
-  out << text;
-  if (!out) throw InvalidArgument(fmt::format("cannot write {}", file.string()));
+  OutputFile out(file);
+  out.stream() << text;
+  out.commit();
 }
 
 std::string shell_quote(const std::string& s) {
@@ -520,7 +521,19 @@ int reproduce(RunContext ctx, const ReproduceOptions& opt) {
     } catch (const json::parse_error& e) {
       throw ParseError(fmt::format("{}: {}", file.string(), e.what()));
     }
-    return finish(results, ctx, opt);
+    // `{}` or another program's JSON is not an earlier run: say so instead of an empty report.
+    if (!results.is_object() || results.value("schema", json()) != "implicit-reproduce-1" ||
+        !results.contains("experiments") || !results["experiments"].is_object())
+      throw ParseError(
+          fmt::format("{}: expected the results.json of `implicit reproduce` (\"schema\": "
+                      "\"implicit-reproduce-1\" and an \"experiments\" object), got {}",
+                      file.string(), printable(results.dump(), 60)));
+    try {
+      return finish(results, ctx, opt);
+    } catch (const json::exception& e) {
+      // A wrongly typed value: the library's message alone does not say which file.
+      throw ParseError(fmt::format("{}: unexpected content ({})", file.string(), e.what()));
+    }
   }
   const auto start = std::chrono::steady_clock::now();
   ThreadLimit limit(ctx.threads);

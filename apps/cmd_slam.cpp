@@ -13,6 +13,7 @@ namespace {
 struct SlamCommand {
   SlamSettings settings;
   RunContext ctx;
+  bool allow_empty = false;
 };
 
 void setup_slam(CLI::App& sub) {
@@ -24,11 +25,11 @@ void setup_slam(CLI::App& sub) {
       ->check(CLI::IsMember({"ekf", "fastslam1", "fastslam2", "implicit", "implicit-rb"}))
       ->capture_default_str();
   sub.add_option("--particles,-M", s.particles, "Particles M (ignored by ekf)")
-      ->check(CLI::Range(1, 1000000))
+      ->check(in_range(1, 1000000))
       ->capture_default_str();
   sub.add_option("--datasets", s.datasets,
                  "Data sets (synthetic seeds seed, seed+1, ...; with --data: repeated runs)")
-      ->check(CLI::Range(1, 100000))
+      ->check(in_range(1, 100000))
       ->capture_default_str();
   sub.add_option("--data", s.data_dir,
                  "Plain-text robot log (or a folder of *.log[.gz]) instead of synthetic data, e.g. "
@@ -43,37 +44,40 @@ void setup_slam(CLI::App& sub) {
       ->check(CLI::IsMember({"paper", "consistent"}))
       ->capture_default_str();
   sub.add_option("--laser-every", s.laser_every, "Synthetic laser every k-th motion step")
-      ->check(CLI::Range(1, 10000))
+      ->check(in_range(1, 10000))
       ->capture_default_str();
   sub.add_option("--noise-scale", s.consistent_noise_scale,
                  "Sigma1 factor of the consistent truth and the filters")
-      ->check(CLI::Range(1e-6, 1.0))
+      ->check(in_range(1e-6, 1.0))
       ->capture_default_str();
   sub.add_option("--control-noise", s.control_noise, "P = diag(p, p) of the motion model")
-      ->check(CLI::Range(1e-6, 10.0))
+      ->check(in_range(1e-6, 10.0))
       ->capture_default_str();
   sub.add_option("--dense-landmarks", s.dense_landmarks,
                  "Synthetic dense landmark field with this many landmarks (0 = the 15 beacons)")
-      ->check(CLI::Range(0, 1000000))
+      ->check(in_range(0, 1000000))
       ->capture_default_str();
   sub.add_option("--dense-laps", s.dense_laps, "Route length of the dense field (laps)")
-      ->check(CLI::Range(1, 1000))
+      ->check(in_range(1, 1000))
       ->capture_default_str();
   sub.add_option("--min-range", s.min_range, "Ignore detections closer than this [m]")
-      ->check(CLI::Range(0.0, 100.0))
+      ->check(in_range(0.0, 100.0))
       ->capture_default_str();
   sub.add_option("--range-sd", s.range_sd,
                  "Filters' range noise sd [m] (0 = spec Sigma2: 0.224 m; synthetic data keep it)")
-      ->check(CLI::Range(0.0, 100.0));
+      ->check(in_range(0.0, 100.0));
   sub.add_option("--bearing-sd", s.bearing_sd_deg,
                  "Filters' bearing noise sd [deg] (0 = spec Sigma2: 1.69 deg)")
-      ->check(CLI::Range(0.0, 90.0));
+      ->check(in_range(0.0, 90.0));
   sub.add_option("--gate-chi2", s.gate_chi2,
                  "ML association gate on the squared Mahalanobis distance (0 = 9.21, chi2_2 99 %)")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(in_range(0.0, 1e6));
   sub.add_option("--new-landmark-density", s.new_landmark_density,
                  "p0, likelihood of a new landmark [1/(m rad)] (0 = 1/(15 pi))")
-      ->check(CLI::Range(0.0, 1e6));
+      ->check(in_range(0.0, 1e6));
+  sub.add_flag("--allow-empty", cmd->allow_empty,
+               "Exit 0 even when the run scored nothing (no step with truth, no landmark, a "
+               "non-finite metric); a warning is printed either way");
   add_common_options(sub, cmd->ctx);
   set_examples(sub, {"implicit slam --method implicit-rb --particles 100 --datasets 10 --json",
                      "implicit slam --method ekf --datasets 50 --out out/slam",
@@ -82,8 +86,13 @@ void setup_slam(CLI::App& sub) {
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     const auto r = run_slam(cmd->settings, cmd->ctx);
+    const auto check = [&] {
+      require_scored(r, "slam", {"error_percent_mean", "rmse_pose_m"},
+                     {"steps_per_dataset", "scored_steps_min", "landmarks_mean"}, cmd->allow_empty);
+    };
     if (cmd->ctx.json) {
-      fmt::print("{}\n", r.dump(2));
+      print_json(r);
+      check();
       return;
     }
     fmt::print(
@@ -98,6 +107,7 @@ void setup_slam(CLI::App& sub) {
         r["map_shape_m"].get<double>(), r["landmarks_mean"].get<double>(),
         r["cpu_ms_per_step"].get<double>(), r["peak_memory_mb"].get<double>(),
         r["seconds"].get<double>());
+    check();
   });
 }
 

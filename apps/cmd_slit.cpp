@@ -18,10 +18,10 @@ struct SlitCommand {
 void setup_slit(CLI::App& sub) {
   auto cmd = std::make_shared<SlitCommand>();
   sub.add_option("--samples,-M", cmd->settings.samples, "Samples M per psi estimate (per slit)")
-      ->check(CLI::Range(1, 1000000))
+      ->check(in_range(1, 1000000))
       ->capture_default_str();
   sub.add_option("--runs", cmd->settings.runs, "Closed-loop runs (Table 2)")
-      ->check(CLI::Range(1, 10000000))
+      ->check(in_range(1, 10000000))
       ->capture_default_str();
   sub.add_option("--mode", cmd->settings.mode,
                  "paper: the paper's estimator (biased, reproduces Table 2); corrected: unbiased "
@@ -30,18 +30,18 @@ void setup_slit(CLI::App& sub) {
       ->capture_default_str();
   sub.add_option("--naive-small", cmd->settings.naive_mc_small,
                  "Plain Monte Carlo walks written for Figure 1")
-      ->check(CLI::Range(1, 10000000))
+      ->check(in_range(1, 10000000))
       ->capture_default_str();
   sub.add_option("--naive-large", cmd->settings.naive_mc_large,
                  "Plain Monte Carlo walks counted for the pass rate")
-      ->check(CLI::Range(1, 100000000))
+      ->check(in_range(1, 100000000))
       ->capture_default_str();
   add_common_options(sub, cmd->ctx);
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     const auto r = run_slit(cmd->settings, cmd->ctx);
     if (cmd->ctx.json) {
-      fmt::print("{}\n", r.dump(2));
+      print_json(r);
       return;
     }
     fmt::print(

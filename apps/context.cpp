@@ -1,10 +1,21 @@
 #include "context.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/version.hpp"
 
 namespace implicit::app {
 
@@ -74,19 +85,194 @@ std::filesystem::path RunContext::csv_path(const std::string& name) const {
   return out_dir / name;
 }
 
-}  // namespace implicit::app
+namespace {
+// Temporary files being written, for the signal handler: fixed storage, since a handler may only
+// read memory and call async-signal-safe functions (unlink, write, _exit).
+constexpr int kSlots = 64;
+constexpr std::size_t kPathBytes = 4096;
+char pending_paths[kSlots][kPathBytes];
+std::atomic<bool> pending_used[kSlots];
+std::atomic<int> outputs_completed{0};
 
-#include <CLI/CLI.hpp>
+int register_pending(const std::filesystem::path& p) {
+  const std::string s = p.string();
+  if (s.size() >= kPathBytes) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    bool expected = false;
+    if (!pending_used[i].load() && pending_used[i].compare_exchange_strong(expected, true)) {
+      std::copy(s.c_str(), s.c_str() + s.size() + 1, pending_paths[i]);
+      return i;
+    }
+  }
+  return -1;  // more than kSlots at once: that file's temporary name may remain after a signal
+}
 
-namespace implicit::app {
+void release_pending(int slot) {
+  if (slot >= 0) pending_used[slot].store(false);
+}
+
+void write_stderr(const char* text) {
+  std::size_t n = 0;
+  while (text[n] != '\0') ++n;
+  [[maybe_unused]] const auto ignored = ::write(STDERR_FILENO, text, n);
+}
+
+extern "C" void on_stop_signal(int signal) {
+  int removed = 0;
+  for (int i = 0; i < kSlots; ++i)
+    if (pending_used[i].load() && ::unlink(pending_paths[i]) == 0) ++removed;
+  // Digits by hand: snprintf is not async-signal-safe.
+  char number[16];
+  auto digits = [&number](int v) {
+    char tmp[16];
+    int k = 0;
+    do {
+      tmp[k++] = static_cast<char>('0' + v % 10);
+      v /= 10;
+    } while (v > 0 && k < 15);
+    for (int i = 0; i < k; ++i) number[i] = tmp[k - 1 - i];
+    number[k] = '\0';
+    return number;
+  };
+  write_stderr(signal == SIGINT ? "\nimplicit: stopped by SIGINT; "
+                                : "\nimplicit: stopped by SIGTERM; ");
+  write_stderr(digits(outputs_completed.load()));
+  write_stderr(" output file(s) were complete and are kept, ");
+  write_stderr(digits(removed));
+  write_stderr(" unfinished one(s) removed\n");
+  ::_exit(128 + signal);
+}
+}  // namespace
+
+void install_signal_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_stop_signal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+OutputFile::OutputFile(std::filesystem::path path, Mode mode) : path_(std::move(path)) {
+  // Same folder, so that the rename is atomic; the pid keeps concurrent runs apart.
+  temporary_ = path_;
+  temporary_ += fmt::format(".tmp{}", ::getpid());
+  std::error_code ec;
+  fresh_ = !std::filesystem::exists(path_, ec);
+  if (mode == Mode::kAppend && !fresh_)
+    std::filesystem::copy_file(path_, temporary_, std::filesystem::copy_options::overwrite_existing,
+                               ec);
+  slot_ = register_pending(temporary_);
+  out_ = std::make_unique<std::ofstream>(
+      temporary_, mode == Mode::kAppend && !fresh_ ? std::ios::app : std::ios::trunc);
+}
+
+OutputFile::~OutputFile() {
+  if (committed_) return;
+  out_.reset();
+  std::error_code ec;
+  std::filesystem::remove(temporary_, ec);
+  release_pending(slot_);
+}
+
+std::ostream& OutputFile::stream() { return *out_; }
+
+void OutputFile::commit() {
+  out_->flush();
+  const bool written = static_cast<bool>(*out_);
+  out_->close();
+  std::error_code ec;
+  if (written && !out_->fail()) std::filesystem::rename(temporary_, path_, ec);
+  if (!written || out_->fail() || ec) {
+    std::filesystem::remove(temporary_, ec);
+    release_pending(slot_);
+    slot_ = -1;
+    throw InvalidArgument(fmt::format("{}: expected a writable output file, got a failed write{}",
+                                      path_.string(), ec ? " (" + ec.message() + ")" : ""));
+  }
+  committed_ = true;
+  release_pending(slot_);
+  ++outputs_completed;
+}
+
+void print_json(nlohmann::json result) {
+  result["version"] = implicit::version();
+  result["commit"] = implicit::git_commit();
+  fmt::print("{}\n", result.dump(2));
+}
+
+void require_scored(const nlohmann::json& result, const std::string& command,
+                    const std::vector<std::string>& finite,
+                    const std::vector<std::string>& positive, bool allow_empty) {
+  std::vector<std::string> missing;
+  for (const auto& key : finite) {
+    const auto it = result.find(key);
+    if (it == result.end() || !it->is_number() || !std::isfinite(it->get<double>()))
+      missing.push_back(key + " is not a finite number");
+  }
+  for (const auto& key : positive) {
+    const auto it = result.find(key);
+    if (it == result.end() || !it->is_number() || !(it->get<double>() > 0.0))
+      missing.push_back(key + " is 0");
+  }
+  if (missing.empty()) return;
+  std::string list;
+  for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
+  fmt::print(
+      stderr, "implicit {}: warning: the run scored nothing: {}{}\n", command, list,
+      allow_empty ? " (allowed by --allow-empty)" : "; exit code 1 (--allow-empty allows it)");
+  if (!allow_empty) throw CLI::RuntimeError(1);
+}
+
+CLI::Validator in_range(int lo, int hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        const char* begin = text.c_str();
+        char* end = nullptr;
+        errno = 0;
+        const long long v = std::strtoll(begin, &end, 10);
+        if (text.empty() || end != begin + text.size() || errno == ERANGE)
+          return fmt::format("expected an integer in [{}, {}], got '{}'", lo, hi, printable(text));
+        if (v < lo || v > hi) return fmt::format("expected [{}, {}], got {}", lo, hi, v);
+        return {};
+      },
+      fmt::format("INT in [{} - {}]", lo, hi));
+}
+
+CLI::Validator in_range(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        const char* begin = text.c_str();
+        char* end = nullptr;
+        const double v = std::strtod(begin, &end);
+        if (text.empty() || end != begin + text.size() || !std::isfinite(v))
+          return fmt::format("expected a finite number in [{}, {}], got '{}'", lo, hi,
+                             printable(text));
+        if (v < lo || v > hi) return fmt::format("expected [{}, {}], got {}", lo, hi, v);
+        return {};
+      },
+      fmt::format("FLOAT in [{} - {}]", lo, hi));
+}
+
 void add_common_options(CLI::App& sub, RunContext& ctx) {
+  // Unsigned: "-1" would otherwise wrap to 2^64 - 1 without a word.
   sub.add_option("--seed", ctx.seed, "Random seed (runs with the same seed are bit-identical)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            const bool digits =
+                !text.empty() && text.size() <= 20 &&
+                std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+            errno = 0;
+            if (!digits || (std::strtoull(text.c_str(), nullptr, 10), errno == ERANGE))
+              return fmt::format("expected an integer in [0, 2^64 - 1], got '{}'", printable(text));
+            return {};
+          },
+          "UINT64"))
       ->capture_default_str();
   sub.add_flag("--json", ctx.json, "Print one JSON object on stdout and nothing else");
   auto* out = sub.add_option("--out", ctx.out_dir, "Folder for CSV output (figures, trajectories)");
   if (!ctx.out_dir.empty()) out->capture_default_str();
   sub.add_option("--threads", ctx.threads, "Worker threads (0 = all cores)")
-      ->check(CLI::Range(0, 1024))
+      ->check(in_range(0, 1024))
       ->capture_default_str();
   sub.add_flag("--quiet", ctx.quiet, "No progress output on stderr");
 }

@@ -6,9 +6,14 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <memory>
 #include <mutex>
+#include <ostream>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json_fwd.hpp>
 
 namespace implicit::app {
 
@@ -59,16 +64,66 @@ struct RunContext {
   std::filesystem::path csv_path(const std::string& name) const;
 };
 
+/// An output file written under a temporary name beside `path` and renamed over it by commit(),
+/// which first checks that every write succeeded: a failed or killed run leaves the previous file
+/// (or none), never a half-written one. Without commit() the temporary file is removed.
+/// Append mode starts from a copy of the existing file (the *_summary.csv files).
+///   OutputFile out(ctx.csv_path("runs.csv"));
+///   out.stream() << "a,b\n";
+///   out.commit();  // throws implicit::InvalidArgument naming the file if a write failed
+class OutputFile {
+ public:
+  enum class Mode { kReplace, kAppend };
+  explicit OutputFile(std::filesystem::path path, Mode mode = Mode::kReplace);
+  ~OutputFile();
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+  std::ostream& stream();
+  /// True when the file did not exist before (to write a CSV header once in append mode).
+  bool fresh() const { return fresh_; }
+  void commit();
+
+ private:
+  std::filesystem::path path_, temporary_;
+  std::unique_ptr<std::ofstream> out_;
+  bool fresh_ = true;
+  bool committed_ = false;
+  int slot_ = -1;  ///< where the signal handler finds the temporary name
+};
+
+/// SIGINT and SIGTERM: remove the outputs being written (their temporary files), say on stderr how
+/// many were completed (those are kept), and exit with 128 + the signal number. Called by main().
+void install_signal_handlers();
+
+/// Prints a subcommand's result on stdout as JSON, with the version and commit of this build.
+void print_json(nlohmann::json result);
+
+/// A run that scored nothing must not look like a result. Each key of `finite` must be a finite
+/// number in `result` and each of `positive` a number > 0; otherwise a warning on stderr names
+/// them (the JSON shows them as null or 0) and, unless `allow_empty`, the run fails with exit
+/// code 1 (CLI::RuntimeError, thrown after the outputs were written so they can be inspected).
+void require_scored(const nlohmann::json& result, const std::string& command,
+                    const std::vector<std::string>& finite,
+                    const std::vector<std::string>& positive, bool allow_empty);
+
 }  // namespace implicit::app
 
 namespace CLI {
 class App;
-}
+class Validator;
+}  // namespace CLI
 
 namespace implicit::app {
 /// Adds the options every subcommand shares: --seed, --json, --out, --threads, --quiet.
 /// Set ctx.out_dir before the call to give --out a default (shown in --help).
 void add_common_options(CLI::App& sub, RunContext& ctx);
+
+/// The range check of a numeric flag: like CLI::Range, but NaN and inf are refused (CLI::Range
+/// lets NaN through, since every comparison with it is false) and an integer flag given "3.7" or
+/// "1e3" is told it needs an integer. The message names the accepted range.
+///   sub.add_option("--runs", s.runs, "Runs")->check(in_range(1, 100000));
+CLI::Validator in_range(int lo, int hi);
+CLI::Validator in_range(double lo, double hi);
 
 /// Appends an "Examples:" block to the subcommand's --help, one command per line:
 ///   set_examples(sub, {"implicit slit --samples 50 --runs 100",

@@ -128,8 +128,8 @@ robot::TruthTrack load_or_make_reference(const LocalizationProblem& problem,
 
 void write_trajectory(const std::filesystem::path& file, const LocalizationProblem& problem,
                       const LocalizationRun& run) {
-  std::ofstream out(file);
-  require(static_cast<bool>(out), "mcl: expected a writable file, got '{}'", file.string());
+  OutputFile output(file);
+  std::ostream& out = output.stream();
   out << "step,time_s,truth_x,truth_y,truth_heading,est_x,est_y,est_heading,std_x,std_y,ess,"
          "resampled,updated,log_likelihood_increment\n";
   for (std::size_t n = 0; n < run.steps.size(); ++n) {
@@ -142,6 +142,7 @@ void write_trajectory(const std::filesystem::path& file, const LocalizationProbl
         std::sqrt(s.covariance(1, 1)), s.ess, s.resampled ? 1 : 0, s.updated ? 1 : 0,
         s.log_likelihood_increment);
   }
+  output.commit();
 }
 
 }  // namespace
@@ -352,8 +353,8 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
 
   if (!ctx.out_dir.empty()) {
     const auto file = ctx.csv_path("mcl_detections.csv");
-    std::ofstream d(file);
-    require(static_cast<bool>(d), "mcl: expected a writable file, got '{}'", file.string());
+    OutputFile output(file);
+    std::ostream& d = output.stream();
     d << "time,scan,range,bearing,x,y,nearest_beacon_id,distance\n";
     for (const auto& r : residuals)
       d << fmt::format(
@@ -361,13 +362,12 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
           r.world(0), r.world(1),
           r.nearest_beacon >= 0 ? problem.map.id(static_cast<std::size_t>(r.nearest_beacon)) : -1,
           r.distance);
+    output.commit();
   }
   if (!ctx.out_dir.empty()) {
-    const auto summary = ctx.csv_path("mcl_summary.csv");
-    const bool fresh = !std::filesystem::exists(summary);
-    std::ofstream out(summary, std::ios::app);
-    require(static_cast<bool>(out), "mcl: expected a writable file, got '{}'", summary.string());
-    if (fresh)
+    OutputFile summary(ctx.csv_path("mcl_summary.csv"), OutputFile::Mode::kAppend);
+    std::ostream& out = summary.stream();
+    if (summary.fresh())
       out << "method,particles,runs,config,p,error_percent_mean,error_percent_std,"
              "error_percent_median,rmse_m,heading_rmse_rad,lost_runs,ess_mean,cpu_ms_per_step,"
              "seed\n";
@@ -375,12 +375,14 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
                        s.method, s.particles, s.runs, s.config, p, mean_of(err), sd_of(err),
                        median_of(err), mean_of(rmse), mean_of(hrmse), lost, mean_of(ess),
                        mean_of(cpu), ctx.seed);
-    const auto beacons = ctx.csv_path("mcl_beacons.csv");
-    std::ofstream b(beacons);
+    summary.commit();
+    OutputFile beacons(ctx.csv_path("mcl_beacons.csv"));
+    std::ostream& b = beacons.stream();
     b << "id,x,y\n";
     for (std::size_t k = 0; k < problem.map.size(); ++k)
       b << fmt::format("{},{:.6f},{:.6f}\n", problem.map.id(k), problem.map.position(k)(0),
                        problem.map.position(k)(1));
+    beacons.commit();
   }
   return j;
 }

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numeric>
 
 #include <fmt/format.h>
@@ -81,7 +82,8 @@ std::vector<slam::SlamDataset> load_logs(const std::filesystem::path& p) {
 void write_csv_outputs(const RunContext& ctx, const std::string& stem, const slam::SlamDataset& d,
                        const slam::SlamRun& run) {
   {
-    std::ofstream os(ctx.csv_path(stem + "_path.csv"));
+    OutputFile file(ctx.csv_path(stem + "_path.csv"));
+    std::ostream& os = file.stream();
     os << "n,x_true,y_true,beta_true,x_hat,y_hat,beta_hat\n";
     for (std::size_t n = 0; n < run.path.size(); ++n) {
       const bool t = n == 0 || d.has_truth(n);
@@ -90,15 +92,18 @@ void write_csv_outputs(const RunContext& ctx, const std::string& stem, const sla
       os << fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", n, truth(0), truth(1),
                         truth(2), run.path[n](0), run.path[n](1), run.path[n](2));
     }
+    file.commit();
   }
   {
-    std::ofstream os(ctx.csv_path(stem + "_map.csv"));
+    OutputFile file(ctx.csv_path(stem + "_map.csv"));
+    std::ostream& os = file.stream();
     os << "kind,id,x,y\n";
     for (std::size_t k = 0; k < d.landmarks.size(); ++k)
       os << fmt::format("true,{},{:.9g},{:.9g}\n", k, d.landmarks[k](0), d.landmarks[k](1));
     for (std::size_t k = 0; k < run.map.landmarks.size(); ++k)
       os << fmt::format("estimate,{},{:.9g},{:.9g}\n", run.map.ids[k], run.map.landmarks[k](0),
                         run.map.landmarks[k](1));
+    file.commit();
   }
 }
 
@@ -188,7 +193,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
 
   std::vector<double> err, err_al, rmse_p, rmse_pa, rmse_h, rmse_m, shape, ess, res, nees, lms,
       mapbytes, newton;
-  std::size_t steps = 0, skipped = 0;
+  std::size_t steps = 0, skipped = 0, scored_min = std::numeric_limits<std::size_t>::max();
   for (std::size_t i = 0; i < k_runs; ++i) {
     const auto& m = metrics[i];
     const auto& st = runs[i].stats;
@@ -209,6 +214,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
                        static_cast<double>(st.newton_solves));
     steps += data[i].steps();
     skipped += st.skipped;
+    scored_min = std::min(scored_min, m.scored_steps);
   }
   nlohmann::json j;
   j["method"] = s.method;
@@ -268,6 +274,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   }
   j["cpu_ms_per_step"] = 1e3 * cpu / static_cast<double>(steps);
   j["steps_per_dataset"] = data[0].steps();
+  j["scored_steps_min"] = scored_min;  // over the data sets; 0: a run had no step with truth
   j["peak_memory_mb"] = peak_memory_mb();
   j["threads"] = active_threads();
   j["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
@@ -276,7 +283,8 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     const std::string stem = fmt::format("slam_{}_M{}", s.method, particles);
     write_csv_outputs(ctx, stem, data[0], runs[0]);
     {
-      std::ofstream os(ctx.csv_path(stem + "_runs.csv"));
+      OutputFile file(ctx.csv_path(stem + "_runs.csv"));
+      std::ostream& os = file.stream();
       os << "dataset,seed,error_percent,error_aligned_percent,rmse_pose_m,rmse_map_m,map_shape_m,"
             "ess_mean,resamplings,landmarks,nees_mean,wall_ms_per_step\n";
       for (std::size_t i = 0; i < k_runs; ++i)
@@ -284,11 +292,11 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
                           data[i].name, ctx.seed + i, err[i], err_al[i], rmse_p[i], rmse_m[i],
                           shape[i], ess[i], res[i], lms[i], nees[i],
                           1e3 * runs[i].wall_seconds / static_cast<double>(data[i].steps()));
+      file.commit();
     }
-    const auto summary = ctx.csv_path("slam_summary.csv");
-    const bool fresh = !std::filesystem::exists(summary);
-    std::ofstream os(summary, std::ios::app);
-    if (fresh)
+    OutputFile summary(ctx.csv_path("slam_summary.csv"), OutputFile::Mode::kAppend);
+    std::ostream& os = summary.stream();
+    if (summary.fresh())
       os << "method,particles,datasets,association,truth,error_percent_mean,error_percent_std,"
             "error_aligned_percent_mean,map_shape_m,rmse_pose_m,rmse_map_m,ess_mean,resamplings,"
             "cpu_ms_per_step,peak_memory_mb\n";
@@ -299,6 +307,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
         stddev(err), mean(err_al), mean(shape), mean(rmse_p), mean(rmse_m),
         is_ekf ? 1.0 : mean(ess), is_ekf ? 0.0 : mean(res), j["cpu_ms_per_step"].get<double>(),
         peak_memory_mb());
+    summary.commit();
   }
   return j;
 }

@@ -29,13 +29,6 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   app.set_version_flag("--version", fmt::format("implicit {} (commit {})", implicit::version(),
                                                 implicit::git_commit()));
-  app.footer(
-      "\nExamples:\n"
-      "  implicit reproduce --quick --out out   # every table and figure, reduced settings\n"
-      "  implicit slit --samples 50 --json      # one experiment, result as JSON\n"
-      "  implicit <subcommand> --help           # options of one subcommand\n"
-      "\nExit codes: 0 success, 1 error, 2 bad command line, 3 report written but an experiment "
-      "or figure failed.\n");
   auto& list = subcommands();
   std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
   for (auto& s : list) {
@@ -46,11 +39,22 @@ int main(int argc, char** argv) {
       set_examples(*sub, {fmt::format("implicit {} --json", s.name),
                           fmt::format("implicit {} --seed 7 --out out/{}", s.name, s.name)});
   }
+  // Set after the subcommands exist: CLI11 copies a parent's footer into each new subcommand,
+  // which would show these examples in place of the subcommand's own.
+  app.footer(
+      "\nExamples:\n"
+      "  implicit reproduce --quick --out out   # every table and figure, reduced settings\n"
+      "  implicit slit --samples 50 --json      # one experiment, result as JSON\n"
+      "  implicit <subcommand> --help           # options of one subcommand\n"
+      "\nExit codes: 0 success, 1 error, 2 bad command line, 3 report written but an experiment "
+      "or figure failed.\n");
+  install_signal_handlers();
   try {
     app.parse(argc, argv);
     if (app.get_subcommands().empty()) {
-      fmt::print("{}", app.help());
-      return 0;
+      // Nothing to do is a usage error (scripts should not mistake it for a run).
+      fmt::print(stderr, "{}", app.help());
+      return 2;
     }
   } catch (const CLI::RuntimeError& e) {
     // Thrown by a subcommand to choose its exit code after reporting on stderr itself.

@@ -10,9 +10,7 @@
 namespace implicit::filter {
 
 LocalizationProblem make_problem(const robot::RobotLog& log, double dt) {
-  require(log.initial.has_value(),
-          "localization: expected an 'initial' record (prior pose) in the log, got none");
-  require(!log.controls.empty(), "localization: expected 'control' records in the log, got none");
+  robot::require_runnable(log);
   require(!log.landmarks.empty(), "localization: expected 'landmark' records (the map), got none");
   LocalizationProblem p;
   p.map = log.landmarks;

@@ -52,12 +52,12 @@ NumericTable read_numeric_csv(const std::filesystem::path& path,
                                    t.header.size()));
     if (t.header[c] != expected_header[c])
       throw ParseError(fmt::format("{}:1: column {}: expected '{}', got '{}'", t.file, c + 1,
-                                   expected_header[c], t.header[c]));
+                                   expected_header[c], printable(t.header[c])));
   }
   if (t.header.size() != expected_header.size())
     throw ParseError(fmt::format("{}:1: expected {} columns, got {} (extra column '{}')", t.file,
                                  expected_header.size(), t.header.size(),
-                                 t.header[expected_header.size()]));
+                                 printable(t.header[expected_header.size()])));
   t.cols = t.header.size();
   std::size_t line_no = 1;
   while (std::getline(in, line)) {
@@ -74,7 +74,7 @@ NumericTable read_numeric_csv(const std::filesystem::path& path,
       const double v = std::strtod(field.c_str(), &end);
       if (field.empty() || end != field.c_str() + field.size() || !std::isfinite(v))
         throw ParseError(fmt::format("{}:{}: field '{}': expected a finite number, got '{}'",
-                                     t.file, line_no, t.header[c], field));
+                                     t.file, line_no, t.header[c], printable(field)));
       t.values.push_back(v);
     }
     t.lines.push_back(line_no);

@@ -45,15 +45,15 @@ class LineParser {
   /// Requires between lo and hi fields after the record kind.
   void expect_fields(std::size_t lo, std::size_t hi, const char* layout) const {
     if (fields() < lo || fields() > hi)
-      fail(fmt::format("record '{}': expected {} ({} to {} fields), got {} fields", kind(), layout,
-                       lo, hi, fields()));
+      fail(fmt::format("record '{}': expected {} ({} to {} fields), got {} fields",
+                       printable(kind()), layout, lo, hi, fields()));
   }
   double number(std::size_t k, const char* field) const {
     const std::string& s = tokens_[k];
     char* end = nullptr;
     const double v = std::strtod(s.c_str(), &end);
     if (end != s.c_str() + s.size() || !std::isfinite(v))
-      fail(fmt::format("field '{}': expected a finite number, got '{}'", field, s));
+      fail(fmt::format("field '{}': expected a finite number, got '{}'", field, printable(s)));
     return v;
   }
   int integer(std::size_t k, const char* field) const {
@@ -61,7 +61,8 @@ class LineParser {
     char* end = nullptr;
     const long v = std::strtol(s.c_str(), &end, 10);
     if (s.empty() || end != s.c_str() + s.size() || v < 0 || v > std::numeric_limits<int>::max())
-      fail(fmt::format("field '{}': expected a non-negative integer, got '{}'", field, s));
+      fail(fmt::format("field '{}': expected a non-negative integer, got '{}'", field,
+                       printable(s)));
     return static_cast<int>(v);
   }
   std::size_t line() const { return line_; }
@@ -82,6 +83,7 @@ void require_later(const LineParser& p, double previous, double t, bool has_prev
 
 RobotLog parse_robot_log(std::istream& in, const std::string& name) {
   RobotLog log;
+  log.source = name;
   struct PendingId {
     int id;
     std::size_t line;
@@ -97,7 +99,7 @@ RobotLog parse_robot_log(std::istream& in, const std::string& name) {
     const std::string& kind = p.kind();
     if (obs_remaining > 0 && kind != "obs")
       p.fail(fmt::format("expected {} more 'obs' line(s) of the scan at t = {}, got '{}'",
-                         obs_remaining, log.scans.back().time, kind));
+                         obs_remaining, log.scans.back().time, printable(kind)));
     if (kind == "landmark") {
       p.expect_fields(3, 3, "'landmark id x y'");
       const int id = p.integer(1, "id");
@@ -116,6 +118,7 @@ RobotLog parse_robot_log(std::istream& in, const std::string& name) {
         if (!(prior.std(k) >= 0))
           p.fail(fmt::format("field '{}': expected a non-negative std deviation, got {}", names[k],
                              prior.std(k)));
+      prior.line = line_no;
       log.initial = prior;
     } else if (kind == "control") {
       p.expect_fields(3, 3, "'control t u1 u2'");
@@ -153,7 +156,7 @@ RobotLog parse_robot_log(std::istream& in, const std::string& name) {
       log.truth.push_back(r);
     } else {
       p.fail(fmt::format("expected a record kind landmark|initial|control|scan|obs|truth, got '{}'",
-                         kind));
+                         printable(kind)));
     }
   }
   if (obs_remaining > 0)
@@ -222,12 +225,14 @@ StepSchedule make_schedule(const RobotLog& log, double start_time, double max_of
                                [](const FilterStep& st, double v) { return st.time < v; });
     std::ptrdiff_t best = -1;
     double best_dt = std::numeric_limits<double>::infinity();
-    for (auto cand : {it - 1, it}) {
-      if (cand < s.steps.begin() || cand >= s.steps.end()) continue;
-      const double d = std::abs(cand->time - t);
+    // The candidates are the steps either side of t; `it - 1` is only formed when it exists
+    // (an iterator before begin() is undefined behaviour even if never dereferenced).
+    const auto first = static_cast<std::size_t>(it - s.steps.begin());
+    for (std::size_t c = first == 0 ? 0 : first - 1; c <= first && c < s.steps.size(); ++c) {
+      const double d = std::abs(s.steps[c].time - t);
       if (d < best_dt) {
         best_dt = d;
-        best = cand - s.steps.begin();
+        best = static_cast<std::ptrdiff_t>(c);
       }
     }
     if (best < 0 || best_dt > max_offset + 1e-9) {
@@ -245,6 +250,23 @@ StepSchedule make_schedule(const RobotLog& log, double start_time, double max_of
     s.observations_used += static_cast<int>(log.scans[k].observations.size());
   }
   return s;
+}
+
+void require_runnable(const RobotLog& log) {
+  const std::string source = log.source.empty() ? std::string("robot log") : log.source;
+  if (!log.initial)
+    throw ParseError(
+        fmt::format("{}: expected an 'initial' record (the prior pose), got none", source));
+  const double t0 = log.initial->time;
+  const bool any = std::any_of(log.controls.begin(), log.controls.end(),
+                               [t0](const TimedControl& c) { return c.time >= t0 - 1e-9; });
+  if (!any)
+    throw ParseError(fmt::format(
+        "{}:{}: expected 'control' records at or after the 'initial' time {}, got {}", source,
+        log.initial->line, t0,
+        log.controls.empty() ? std::string("none in the file")
+                             : fmt::format("{} all earlier (the last at {})", log.controls.size(),
+                                           log.controls.back().time)));
 }
 
 TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule, double max_gap) {

@@ -19,7 +19,7 @@ std::filesystem::path resolve_data_file(const std::filesystem::path& path) {
   return std::filesystem::exists(gz) ? gz : path;
 }
 
-std::string read_text_file(const std::filesystem::path& requested) {
+std::string read_text_file(const std::filesystem::path& requested, std::size_t max_bytes) {
   const std::filesystem::path path = resolve_data_file(requested);
   const std::string name = path.string();
   if (std::filesystem::is_directory(path))
@@ -32,8 +32,16 @@ std::string read_text_file(const std::filesystem::path& requested) {
   std::string text;
   std::array<char, 1 << 16> buf{};
   int got = 0;
-  while ((got = gzread(f, buf.data(), static_cast<unsigned>(buf.size()))) > 0)
+  while ((got = gzread(f, buf.data(), static_cast<unsigned>(buf.size()))) > 0) {
+    // A bound, so that /dev/zero or a decompression bomb is an error, not the OOM killer.
+    if (text.size() + static_cast<std::size_t>(got) > max_bytes) {
+      gzclose(f);
+      throw ParseError(fmt::format(
+          "{}:{}: expected at most {:g} MiB of text, got more (not a data file of this project?)",
+          name, 1 + std::count(text.begin(), text.end(), '\n'), max_bytes / 1048576.0));
+    }
     text.append(buf.data(), static_cast<std::size_t>(got));
+  }
   int err = Z_OK;
   const std::string message = gzerror(f, &err);
   const int closed = gzclose(f);

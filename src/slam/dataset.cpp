@@ -19,6 +19,7 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/robot/csv_table.hpp"
 #include "implicit/robot/log_format.hpp"
 
 namespace implicit::slam {
@@ -52,10 +53,30 @@ double to_double(const std::string& s, const std::filesystem::path& file, std::s
   if (s == "nan" || s == "NaN") return std::numeric_limits<double>::quiet_NaN();
   char* end = nullptr;
   const double v = std::strtod(s.c_str(), &end);
-  if (s.empty() || end != s.c_str() + s.size())
+  if (s.empty() || end != s.c_str() + s.size() || std::isinf(v))
     throw ParseError(fmt::format("{}:{}: field '{}': expected a number, got '{}'", file.string(),
-                                 line, field, s));
+                                 line, printable(field), printable(s)));
   return v;
+}
+
+// For fields with no "missing" reading (landmark positions, controls): NaN is an error too.
+double to_finite(const std::string& s, const std::filesystem::path& file, std::size_t line,
+                 const std::string& field) {
+  const double v = to_double(s, file, line, field);
+  if (std::isnan(v))
+    throw ParseError(fmt::format("{}:{}: field '{}': expected a finite number, got '{}'",
+                                 file.string(), line, field, printable(s)));
+  return v;
+}
+
+// The fields of a CSV row, which must have as many as the header.
+std::vector<std::string> row_fields(const std::string& row, std::size_t columns,
+                                    const std::filesystem::path& file, std::size_t line) {
+  auto f = split(row, ',');
+  if (f.size() != columns)
+    throw ParseError(
+        fmt::format("{}:{}: expected {} fields, got {}", file.string(), line, columns, f.size()));
+  return f;
 }
 
 long to_int(const std::string& s, const std::filesystem::path& file, std::size_t line,
@@ -64,7 +85,7 @@ long to_int(const std::string& s, const std::filesystem::path& file, std::size_t
   const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
   if (r.ec != std::errc() || r.ptr != s.data() + s.size())
     throw ParseError(fmt::format("{}:{}: field '{}': expected an integer, got '{}'", file.string(),
-                                 line, field, s));
+                                 line, printable(field), printable(s)));
   return v;
 }
 
@@ -218,32 +239,18 @@ std::filesystem::path default_data_dir() {
 }
 
 std::vector<std::string> read_text_lines(const std::filesystem::path& path) {
-  gzFile f = gzopen(path.string().c_str(), "rb");
-  if (f == nullptr)
-    throw ParseError(fmt::format("{}: expected a readable file, got none", path.string()));
+  // One reader for every text file (gzip, size bound, errors naming the file): robot's.
+  const std::string text = robot::read_text_file(path);
   std::vector<std::string> lines;
-  std::string cur;
-  char buf[1 << 16];
-  int got = 0;
-  while ((got = gzread(f, buf, sizeof(buf))) > 0) {
-    for (int i = 0; i < got; ++i) {
-      if (buf[i] == '\n') {
-        if (!cur.empty() && cur.back() == '\r') cur.pop_back();
-        lines.push_back(std::move(cur));
-        cur.clear();
-      } else {
-        cur.push_back(buf[i]);
-      }
-    }
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    std::size_t stop = end;
+    if (stop > start && text[stop - 1] == '\r') --stop;
+    lines.emplace_back(text, start, stop - start);
+    start = end + 1;
   }
-  int err = 0;
-  const char* msg = gzerror(f, &err);
-  const bool failed = got < 0 || (err != Z_OK && err != Z_STREAM_END);
-  const std::string what = failed ? std::string(msg) : std::string();
-  gzclose(f);
-  if (failed)
-    throw ParseError(fmt::format("{}: expected gzip or text, got: {}", path.string(), what));
-  if (!cur.empty()) lines.push_back(std::move(cur));
   return lines;
 }
 
@@ -258,12 +265,9 @@ SlamScenario load_carpark_scenario(const std::filesystem::path& data_dir) {
     const auto cvc = column(header, "vc", file), cal = column(header, "alpha", file);
     for (std::size_t i = 1; i < lines.size(); ++i) {
       if (lines[i].empty()) continue;
-      const auto f = split(lines[i], ',');
-      if (f.size() != header.size())
-        throw ParseError(fmt::format("{}:{}: expected {} fields, got {}", file.string(), i + 1,
-                                     header.size(), f.size()));
-      s.controls.emplace_back(to_double(f[cvc], file, i + 1, "vc"),
-                              to_double(f[cal], file, i + 1, "alpha"));
+      const auto f = row_fields(lines[i], header.size(), file, i + 1);
+      s.controls.emplace_back(to_finite(f[cvc], file, i + 1, "vc"),
+                              to_finite(f[cal], file, i + 1, "alpha"));
     }
   }
   {
@@ -274,9 +278,9 @@ SlamScenario load_carpark_scenario(const std::filesystem::path& data_dir) {
     const auto cx = column(header, "east_m", file), cy = column(header, "north_m", file);
     for (std::size_t i = 1; i < lines.size(); ++i) {
       if (lines[i].empty()) continue;
-      const auto f = split(lines[i], ',');
-      s.landmarks.emplace_back(to_double(f.at(cx), file, i + 1, "east_m"),
-                               to_double(f.at(cy), file, i + 1, "north_m"));
+      const auto f = row_fields(lines[i], header.size(), file, i + 1);
+      s.landmarks.emplace_back(to_finite(f[cx], file, i + 1, "east_m"),
+                               to_finite(f[cy], file, i + 1, "north_m"));
     }
   }
   return s;
@@ -299,10 +303,7 @@ SlamDataset read_reference_csv(const std::filesystem::path& path,
   SlamDatasetBuilder b(d);
   for (std::size_t i = 1; i < lines.size(); ++i) {
     if (lines[i].empty()) continue;
-    const auto f = split(lines[i], ',');
-    if (f.size() != header.size())
-      throw ParseError(fmt::format("{}:{}: expected {} fields, got {}", path.string(), i + 1,
-                                   header.size(), f.size()));
+    const auto f = row_fields(lines[i], header.size(), path, i + 1);
     const Pose x(to_double(f[c_x], path, i + 1, "x_true"), to_double(f[c_y], path, i + 1, "y_true"),
                  to_double(f[c_b], path, i + 1, "beta_true"));
     d.truth.push_back(x);
@@ -333,8 +334,8 @@ std::vector<Pose> read_reference_trace(const std::filesystem::path& path) {
   std::vector<Pose> out;
   for (std::size_t i = 1; i < lines.size(); ++i) {
     if (lines[i].empty()) continue;
-    const auto f = split(lines[i], ',');
-    out.emplace_back(to_double(f.at(cx), path, i + 1, "x_hat"),
+    const auto f = row_fields(lines[i], header.size(), path, i + 1);
+    out.emplace_back(to_double(f[cx], path, i + 1, "x_hat"),
                      to_double(f.at(cy), path, i + 1, "y_hat"),
                      to_double(f.at(cb), path, i + 1, "beta_hat"));
   }
@@ -343,6 +344,9 @@ std::vector<Pose> read_reference_trace(const std::filesystem::path& path) {
 
 // ---- the plain-text robot log (implicit/robot/log_format.hpp) ----------------------------
 namespace {
+constexpr double kMaxVehicleDt = 60.0;     // [s] a control period; longer is not a vehicle log
+constexpr double kMaxVehicleSize = 100.0;  // [m] wheelbase and LASER offsets
+
 // Optional geometry comment: "# vehicle dt=0.025 L=2.83 H=0.76 a=0.95 b=0.5" (other readers
 // ignore comments; the Car Park values are the default).
 robot::UteParams vehicle_from_comments(const std::vector<std::string>& lines,
@@ -355,9 +359,24 @@ robot::UteParams vehicle_from_comments(const std::vector<std::string>& lines,
       const auto eq = f[k].find('=');
       if (eq == std::string::npos)
         throw ParseError(fmt::format("{}:{}: vehicle comment: expected key=value, got '{}'",
-                                     path.string(), i + 1, f[k]));
+                                     path.string(), i + 1, printable(f[k])));
       const std::string key = f[k].substr(0, eq);
+      if (key != "dt" && key != "L" && key != "H" && key != "a" && key != "b")
+        throw ParseError(fmt::format("{}:{}: vehicle comment: expected dt|L|H|a|b, got '{}'",
+                                     path.string(), i + 1, printable(key)));
       const double val = to_double(f[k].substr(eq + 1), path, i + 1, key);
+      // A NaN here drops every observation and a huge dt turns every metric into NaN, both
+      // silently, so the ranges are checked where the line is known.
+      const bool ok = key == "dt"  ? (val > 0.0 && val <= kMaxVehicleDt)
+                      : key == "L" ? (val > 0.0 && val <= kMaxVehicleSize)
+                                   : std::abs(val) <= kMaxVehicleSize;
+      if (!ok)
+        throw ParseError(fmt::format(
+            "{}:{}: vehicle comment: field '{}': expected {}, got '{}'", path.string(), i + 1, key,
+            key == "dt"  ? fmt::format("a time step in (0, {}] s", kMaxVehicleDt)
+            : key == "L" ? fmt::format("a wheelbase in (0, {}] m", kMaxVehicleSize)
+                         : fmt::format("an offset in [-{0}, {0}] m", kMaxVehicleSize),
+            printable(f[k].substr(eq + 1))));
       if (key == "dt")
         v.dt = val;
       else if (key == "L")
@@ -366,11 +385,8 @@ robot::UteParams vehicle_from_comments(const std::vector<std::string>& lines,
         v.encoder_offset = val;
       else if (key == "a")
         v.laser_forward = val;
-      else if (key == "b")
-        v.laser_left = val;
       else
-        throw ParseError(fmt::format("{}:{}: vehicle comment: expected dt|L|H|a|b, got '{}'",
-                                     path.string(), i + 1, key));
+        v.laser_left = val;
     }
   }
   v.validate();
@@ -380,8 +396,7 @@ robot::UteParams vehicle_from_comments(const std::vector<std::string>& lines,
 
 SlamDataset dataset_from_robot_log(const robot::RobotLog& log, const robot::UteParams& vehicle,
                                    const std::string& name) {
-  require(log.initial.has_value(), "log '{}': expected an 'initial' record for SLAM, got none",
-          name);
+  robot::require_runnable(log);
   SlamDataset d;
   d.name = name;
   d.vehicle = vehicle;

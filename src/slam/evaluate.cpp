@@ -121,7 +121,13 @@ SlamMetrics evaluate(const SlamDataset& data, const SlamRun& run) {
       }
     }
   }
-  if (count > 0) {
+  m.scored_steps = count;
+  if (count == 0) {
+    // Nothing to compare with: NaN (null in JSON), not an error of 0 that looks like a result.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    m.error_percent = m.error_aligned_percent = m.rmse_pose_m = m.rmse_pose_aligned_m = nan;
+    m.rmse_heading_rad = nan;
+  } else {
     m.error_percent = 100.0 * std::sqrt(num) / std::sqrt(den);
     m.rmse_pose_m = std::sqrt(num / static_cast<double>(count));
     m.rmse_heading_rad = data.truth_has_heading ? std::sqrt(head / static_cast<double>(count)) : 0;

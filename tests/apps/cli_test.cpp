@@ -29,13 +29,6 @@ TEST(Cli, VersionPrintsVersionAndCommit) {
       << r.out;
 }
 
-TEST(Cli, NoArgumentsPrintsHelpWithExitCodes) {
-  const auto r = run_cli("");
-  EXPECT_EQ(r.code, 0);
-  EXPECT_NE(r.out.find("reproduce"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("Exit codes"), std::string::npos) << r.out;
-}
-
 TEST(Cli, UnknownFlagNamesTheFlagAndExits2) {
   const auto r = run_cli("reproduce --no-such-flag");
   EXPECT_EQ(r.code, 2);

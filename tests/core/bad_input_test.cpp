@@ -219,5 +219,48 @@ TEST(BadInput, RandomMapFailureIsAStatus) {
   EXPECT_EQ(set.zero_weight, set.map_failures);
 }
 
+TEST(BadInput, SampleWithEveryWeightZeroHasNoEffectiveSample) {
+  const auto nowhere = make_autodiff_target<1>([](const auto& x) {
+    using S = typename std::decay_t<decltype(x)>::Scalar;
+    return S(kInf) + 0.0 * x(0);
+  });
+  const auto lp = Laplace<1>::make(Vec<1>(0.0), 0.0, Mat<1>(1.0));
+  const auto set = sample_with(nowhere, lp, 50, {.seed = 5});
+  EXPECT_EQ(set.zero_weight, 50);
+  EXPECT_EQ(set.ess, 0.0);
+  EXPECT_EQ(set.log_Z, -kInf);
+}
+
+TEST(BadInput, MinusInfinityFInTheLinearMapIsACountedZeroWeight) {
+  // F = -inf for x < 0 (an unbounded density there): like a random-map failure, each such sample
+  // gets weight zero and is counted, instead of a +inf weight that makes normalising throw.
+  const auto f = make_autodiff_target<1>([](const auto& x) {
+    using S = typename std::decay_t<decltype(x)>::Scalar;
+    if (x(0) < 0.0) return S(-kInf);
+    return S(0.5 * (x(0) - 2.0) * (x(0) - 2.0));
+  });
+  const auto lp = Laplace<1>::make(Vec<1>(2.0), 0.0, Mat<1>(0.5));
+  const auto set = sample_with(f, lp, 2000, {.seed = 6});
+  int negative = 0;
+  for (std::size_t j = 0; j < set.size(); ++j) negative += set.x(0, j) < 0.0;
+  EXPECT_GT(negative, 0);
+  EXPECT_EQ(set.map_failures, negative);
+  EXPECT_EQ(set.zero_weight, negative);
+  EXPECT_TRUE(std::isfinite(set.log_Z));
+}
+
+TEST(BadInput, SampleCountBeyondMemoryIsInvalidArgument) {
+  const auto f = make_autodiff_target<1>([](const auto& x) { return 0.5 * x(0) * x(0); });
+  const auto lp = Laplace<1>::make(Vec<1>(0.0), 0.0, Mat<1>(1.0));
+  try {
+    sample_with(f, lp, std::size_t{1} << 61, {.seed = 7});
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("expected a number of samples that fits in memory"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace implicit

@@ -8,8 +8,10 @@
 
 #include <fmt/format.h>
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace implicit {
 
@@ -29,6 +31,25 @@ class ParseError : public std::runtime_error {
 template <typename... Args>
 inline void require(bool condition, fmt::format_string<Args...> format, Args&&... args) {
   if (!condition) throw InvalidArgument(fmt::format(format, std::forward<Args>(args)...));
+}
+
+/// Text from a data file made safe to quote in an error message: control bytes (ESC, NUL, ...)
+/// and bytes >= 0x7f become \xNN, so a message cannot move a terminal's cursor or hide text;
+/// anything past max_chars is cut and marked with "...".
+inline std::string printable(std::string_view text, std::size_t max_chars = 80) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (out.size() >= max_chars) {
+      out += "...";
+      break;
+    }
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c >= 0x20 && c < 0x7f)
+      out += static_cast<char>(c);
+    else
+      out += fmt::format("\\x{:02x}", c);
+  }
+  return out;
 }
 
 }  // namespace implicit

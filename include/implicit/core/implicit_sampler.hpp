@@ -11,7 +11,9 @@
 // Sample j draws its reference variable from the stream (seed, step, j, purpose::kReference), so
 // the result is bit-identical for any number of threads.
 
+#include <cmath>
 #include <cstddef>
+#include <exception>
 #include <limits>
 #include <vector>
 
@@ -43,7 +45,8 @@ struct SampleSet {
   double log_Z = -std::numeric_limits<double>::infinity();  ///< log of the mean weight
   double ess = 0.0;                                         ///< effective sample size
   int zero_weight = 0;   ///< samples with weight 0 (outside the support, or map failures)
-  int map_failures = 0;  ///< random-map root finding failures
+  int map_failures = 0;  ///< samples not placed: random-map root failures; linear map: F = -inf
+                         ///< or NaN at the sample (both get weight zero)
   MinimizeStatus minimize_status = MinimizeStatus::kConverged;
   std::vector<Laplace<N>> modes;  ///< the Laplace approximation(s) used
 
@@ -53,12 +56,33 @@ struct SampleSet {
 };
 
 namespace detail {
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+/// Room for M samples of dimension m; a size the machine cannot hold is bad input, not bad_alloc.
+template <int N>
+void allocate(SampleSet<N>& s, int m, std::size_t M) {
+  const double gib = static_cast<double>(M) * (m + 2) * sizeof(double) / (1 << 30);
+  try {
+    // The vectors first: beyond their max_size they throw length_error before asking malloc
+    // (a sanitizer's allocator aborts on absurd sizes instead of throwing bad_alloc).
+    s.log_weights.assign(M, 0.0);
+    s.weights.reserve(M);
+    s.x.resize(m, static_cast<Eigen::Index>(M));
+  } catch (const std::exception&) {  // bad_alloc, or length_error beyond a vector's max_size
+    throw InvalidArgument(fmt::format(
+        "implicit sampling: expected a number of samples that fits in memory, got M = {} "
+        "({:.3g} GiB)",
+        M, gib));
+  }
+}
+
 template <int N>
 void finish(SampleSet<N>& s) {
   s.weights.resize(s.log_weights.size());
   const auto summary = normalize_log_weights(s.log_weights, s.weights);
   s.log_Z = summary.log_mean;
-  s.ess = summary.ess;
+  // All weights zero: the uniform weights are a placeholder, so no sample is effective.
+  s.ess = summary.all_zero ? 0.0 : summary.ess;
   for (double l : s.log_weights)
     if (!std::isfinite(l)) ++s.zero_weight;
 }
@@ -76,8 +100,7 @@ SampleSet<T::Dim> sample_with(const T& f, const Laplace<T::Dim>& lp, std::size_t
           m);
   SampleSet<N> s;
   s.modes = {lp};
-  s.x.resize(m, static_cast<Eigen::Index>(M));
-  s.log_weights.assign(M, 0.0);
+  detail::allocate(s, m, M);
   std::vector<unsigned char> failed(M, 0);
   auto one = [&](std::size_t j) {
     Rng rng({key.seed, key.step, j, purpose::kReference});
@@ -85,6 +108,12 @@ SampleSet<T::Dim> sample_with(const T& f, const Laplace<T::Dim>& lp, std::size_t
     Vec<N> x(m);
     if (options.map == MapKind::kLinear) {
       s.log_weights[j] = linear_map_sample(f, lp, xi, x);
+      // F = -inf or NaN at a sample (an unbounded density): weight zero and counted, as the
+      // random map does, not a +inf weight that makes the normalisation throw.
+      if (std::isnan(s.log_weights[j]) || s.log_weights[j] == detail::kInfinity) {
+        s.log_weights[j] = -detail::kInfinity;
+        failed[j] = 1;
+      }
     } else {
       failed[j] = random_map_sample(f, lp, xi, x, s.log_weights[j], options.random_map) !=
                   RandomMapStatus::kOk;
@@ -125,8 +154,7 @@ SampleSet<T::Dim> sample_mixture(const T& f, const MixtureProposal<T::Dim>& q, s
   const int m = f.dim();
   SampleSet<N> s;
   s.modes = q.components();
-  s.x.resize(m, static_cast<Eigen::Index>(M));
-  s.log_weights.assign(M, 0.0);
+  detail::allocate(s, m, M);
   auto one = [&](std::size_t j) {
     Rng rng({key.seed, key.step, j, purpose::kReference});
     const double u = rng.uniform();

@@ -39,7 +39,11 @@ std::filesystem::path resolve_data_file(const std::filesystem::path& path);
 /// Throws ParseError "file:line: expected a complete gzip stream, got corrupt or truncated data
 /// ..." for a damaged gzip file (line = where the readable text stops), or when it cannot be
 /// opened. Used by every reader of robot/ (CSV tables, the robot log).
-std::string read_text_file(const std::filesystem::path& path);
+/// Files larger than max_bytes (decompressed) are refused with a ParseError: a bound, so that
+/// `--data /dev/zero` or a decompression bomb ends in a message, not the OOM killer.
+inline constexpr std::size_t kMaxTextFileBytes = std::size_t{256} << 20;
+std::string read_text_file(const std::filesystem::path& path,
+                           std::size_t max_bytes = kMaxTextFileBytes);
 
 /// Reads a CSV whose header must equal `expected_header` exactly (gzip accepted, see
 /// read_text_file).

@@ -9,6 +9,7 @@
 // Ids are arbitrary non-negative integers (file ids); filters work with positions 0..size()-1.
 
 #include <cstddef>
+#include <unordered_map>
 #include <vector>
 
 #include "implicit/core/error.hpp"
@@ -26,6 +27,7 @@ class LandmarkMap {
             "landmark map: expected a finite position for landmark {}, got ({}, {})", id,
             position(0), position(1));
     require(index_of(id) < 0, "landmark map: expected unique landmark ids, got {} twice", id);
+    index_.emplace(id, static_cast<int>(ids_.size()));
     ids_.push_back(id);
     positions_.push_back(position);
   }
@@ -37,15 +39,16 @@ class LandmarkMap {
   const std::vector<Landmark>& positions() const { return positions_; }
 
   /// Position in the map of the landmark with this id, or -1.
+  /// Hashed, so that reading a log with many landmarks stays linear in its length.
   int index_of(int id) const {
-    for (std::size_t k = 0; k < ids_.size(); ++k)
-      if (ids_[k] == id) return static_cast<int>(k);
-    return -1;
+    const auto it = index_.find(id);
+    return it == index_.end() ? -1 : it->second;
   }
 
  private:
   std::vector<int> ids_;
   std::vector<Landmark> positions_;
+  std::unordered_map<int, int> index_;  ///< id -> position in ids_ and positions_
 };
 
 }  // namespace implicit::robot

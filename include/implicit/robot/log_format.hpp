@@ -59,7 +59,8 @@ struct TruthRecord {
 struct PosePrior {
   double time = 0.0;
   Pose mean;
-  Vec<3> std;  ///< standard deviations of x, y, heading
+  Vec<3> std;            ///< standard deviations of x, y, heading
+  std::size_t line = 0;  ///< line of the 'initial' record in its file (0: not read from one)
 };
 
 struct RobotLog {
@@ -68,6 +69,7 @@ struct RobotLog {
   std::vector<TimedControl> controls;
   std::vector<ObservationSet> scans;
   std::vector<TruthRecord> truth;
+  std::string source;  ///< the file (or stream name) it was parsed from, for error messages
 };
 
 /// Parses a log from a stream; `name` is used in error messages.
@@ -97,6 +99,10 @@ struct StepSchedule {
 /// step; each scan is attached to the step nearest in time if that is within max_offset seconds
 /// (use half the step length), otherwise skipped. Two scans on one step: the later one is skipped.
 StepSchedule make_schedule(const RobotLog& log, double start_time, double max_offset);
+
+/// What every run on a log needs: an 'initial' record and at least one control at or after its
+/// time (a run with no step would score nothing). Throws ParseError naming the source and line.
+void require_runnable(const RobotLog& log);
 
 /// Ground truth at each step time, interpolated linearly between truth records; NaN outside
 /// their time range and inside gaps longer than max_gap seconds (a straight line across a GPS

@@ -63,8 +63,9 @@ struct SlamMetrics {
   double alignment_angle_rad = 0.0;
   double nees_mean = 0.0;  ///< over steps with an SPD covariance
   std::size_t nees_steps = 0;
-  std::size_t landmarks = 0;  ///< in the estimated map
-  std::vector<double> nees;   ///< per step (NaN where undefined)
+  std::size_t landmarks = 0;     ///< in the estimated map
+  std::size_t scored_steps = 0;  ///< steps with truth; 0 makes the pose metrics NaN
+  std::vector<double> nees;      ///< per step (NaN where undefined)
 };
 
 SlamMetrics evaluate(const SlamDataset& data, const SlamRun& run);

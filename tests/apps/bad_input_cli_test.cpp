@@ -1,0 +1,182 @@
+// The command line on bad input: flag values (usage error, exit 2, the flag named), data that
+// cannot be run or scores nothing (exit 1 naming the file and line, or the empty metric), outputs
+// that cannot be written (exit 1); and what every subcommand shows and prints.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "apps/cli_runner.hpp"
+
+namespace {
+
+using implicit::test::run_cli;
+using implicit::test::TempDir;
+
+std::string write_log(const TempDir& dir, const std::string& text) {
+  const auto path = dir.path() / "run.log";
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+// A log SLAM and MCL can run: three landmarks seen (roughly) from a car driving along x.
+std::string small_log(bool with_truth) {
+  std::string text =
+      "landmark 1 5 3\nlandmark 2 10 -3\nlandmark 3 15 3\ninitial 0 0 0 0 0.1 0.1 0.01\n";
+  for (int n = 1; n <= 40; ++n) {
+    const double t = 0.025 * n;
+    text += "control " + std::to_string(t) + " 2 0\n";
+    if (n % 8 == 0)
+      text += "scan " + std::to_string(t) + " 1\nobs 5 0.5 " + std::to_string(n / 16 + 1) + "\n";
+    if (with_truth) text += "truth " + std::to_string(t) + " " + std::to_string(2 * t) + " 0\n";
+  }
+  return text;
+}
+
+TEST(Cli, BareCommandPrintsUsageAndExits2) {
+  const auto r = run_cli("");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("Subcommands:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("Exit codes"), std::string::npos) << r.err;
+}
+
+TEST(Cli, MclNanFlagIsAUsageError) {
+  for (const char* value : {"nan", "NaN", "inf", "-inf"}) {
+    const auto r = run_cli(std::string("mcl --p ") + value);
+    EXPECT_EQ(r.code, 2) << value;
+    EXPECT_NE(r.err.find("--p"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("expected a finite number in [0, 10]"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(run_cli("slam --control-noise nan").code, 2);
+}
+
+TEST(Cli, NegativeSeedIsAUsageErrorNotAWrap) {
+  const auto r = run_cli("slit --seed -1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--seed"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("expected an integer in [0, 2^64 - 1], got '-1'"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(run_cli("slit --seed 18446744073709551616").code, 2);  // 2^64
+}
+
+TEST(Cli, FractionalValueOfAnIntegerFlagSaysInteger) {
+  const auto r = run_cli("slam --particles 3.7");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--particles"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("expected an integer in [1, 1000000], got '3.7'"), std::string::npos)
+      << r.err;
+  const auto range = run_cli("slam --particles 0");
+  EXPECT_EQ(range.code, 2);
+  EXPECT_NE(range.err.find("expected [1, 1000000], got 0"), std::string::npos) << range.err;
+}
+
+TEST(Cli, SubcommandHelpShowsItsOwnExamples) {
+  for (const char* name : {"slit", "arm", "himmelblau", "mcl", "slam", "reproduce"}) {
+    const auto r = run_cli(std::string(name) + " --help");
+    EXPECT_EQ(r.code, 0) << name;
+    EXPECT_NE(r.out.find(std::string("implicit ") + name + " "), std::string::npos)
+        << name << " shows no example of itself:\n"
+        << r.out;
+    EXPECT_EQ(r.out.find("implicit <subcommand> --help"), std::string::npos)
+        << name << " shows the top-level examples:\n"
+        << r.out;
+  }
+}
+
+TEST(Cli, JsonCarriesVersionAndCommit) {
+  const auto r = run_cli("arm --json --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j.contains("version") && j["version"].is_string()) << r.out;
+  EXPECT_TRUE(j.contains("commit") && j["commit"].is_string()) << r.out;
+}
+
+TEST(Cli, SlamLogWithNoControlsExits1NamingTheLine) {
+  TempDir dir("slam_no_controls");
+  const auto log = write_log(dir, "initial 1 0 0 0 0 0 0\nscan 0.5 0\n");
+  for (const char* cmd : {"slam --datasets 1 --quiet --data ", "mcl --runs 1 --quiet --data "}) {
+    const auto r = run_cli(cmd + log);
+    EXPECT_EQ(r.code, 1) << cmd << r.err;
+    EXPECT_NE(r.err.find(log + ":1: expected 'control' records"), std::string::npos)
+        << cmd << r.err;
+  }
+}
+
+TEST(Cli, SlamVehicleNanExits1NamingTheLine) {
+  TempDir dir("slam_vehicle_nan");
+  const auto log = write_log(dir, "# vehicle a=nan\n" + small_log(true));
+  const auto r = run_cli("slam --datasets 1 --quiet --data " + log);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find(log + ":1: vehicle comment: field 'a'"), std::string::npos) << r.err;
+}
+
+TEST(Cli, SlamRunThatScoresNothingExits1UnlessAllowed) {
+  TempDir dir("slam_unscored");
+  const auto log = write_log(dir, small_log(false));
+  const std::string args = "slam --method ekf --association known --datasets 1 --json --data ";
+  const auto r = run_cli(args + log);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("scored nothing: error_percent_mean is not a finite number"),
+            std::string::npos)
+      << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["error_percent_mean"].is_null()) << r.out;
+  EXPECT_EQ(j["scored_steps_min"], 0) << r.out;
+  const auto allowed = run_cli(args + log + " --allow-empty");
+  EXPECT_EQ(allowed.code, 0) << allowed.err;
+  EXPECT_NE(allowed.err.find("allowed by --allow-empty"), std::string::npos) << allowed.err;
+  // The same log with truth is scored, and says nothing.
+  const auto scored = run_cli(args + write_log(dir, small_log(true)));
+  EXPECT_EQ(scored.code, 0) << scored.err;
+  EXPECT_EQ(scored.err.find("warning"), std::string::npos) << scored.err;
+}
+
+TEST(Cli, SlamOutIntoUnwritableFolderExits1) {
+  // procfs refuses new files even to root, for whom a chmod 555 folder is still writable.
+  const auto r = run_cli("slam --method ekf --datasets 1 --quiet --out /proc/self");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("/proc/self/slam_ekf_M1_path.csv: expected a writable output file"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST(Cli, ReportOnlyWithAnEmptyObjectExits1NamingTheFile) {
+  TempDir dir("report_only_empty");
+  std::ofstream(dir.path() / "results.json") << "{}\n";
+  const auto r =
+      run_cli("reproduce --report-only --no-figures --quiet --out " + dir.path().string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find((dir.path() / "results.json").string() +
+                       ": expected the results.json of `implicit reproduce`"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST(Cli, ReportOnlyWithWronglyTypedJsonNamesTheFile) {
+  TempDir dir("report_only_typed");
+  std::ofstream(dir.path() / "results.json")
+      << R"({"schema": "implicit-reproduce-1", "experiments": {"slit": 5}, "seed": "x"})";
+  const auto r =
+      run_cli("reproduce --report-only --no-figures --quiet --out " + dir.path().string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find((dir.path() / "results.json").string() + ": "), std::string::npos) << r.err;
+}
+
+TEST(Cli, SigtermStopsWithAMessageAndLeavesNoPartialOutput) {
+  TempDir dir("sigterm");
+  const auto r = implicit::test::run_shell(
+      std::string("'") + IMPLICIT_CLI +
+      "' slam --method fastslam2 --datasets 100000 --quiet --out '" + dir.path().string() +
+      "' & pid=$!; sleep 2; kill -TERM $pid; wait $pid");
+  EXPECT_EQ(r.code, 128 + 15) << r.err;
+  EXPECT_NE(r.err.find("implicit: stopped by SIGTERM; 0 output file(s) were complete and are kept"),
+            std::string::npos)
+      << r.err;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ADD_FAILURE() << "left behind: " << entry.path();
+}
+
+}  // namespace
