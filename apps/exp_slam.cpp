@@ -104,7 +104,8 @@ void write_csv_outputs(const RunContext& ctx, const std::string& stem, const sla
 }
 
 // What the summary needs of one run, as numbers that travel between ranks (parallel_runs.hpp).
-// Run 0 also carries its path and map, for the CSV files.
+// Run 0 also carries its path and map, for the CSV files; with the consistent truth, every run
+// carries its NEES per step, for the band.
 struct RunSummary {
   std::string name;
   std::size_t steps = 0;
@@ -113,7 +114,7 @@ struct RunSummary {
 };
 
 RunRecord to_record(const slam::SlamDataset& d, const slam::SlamRun& run,
-                    const slam::SlamMetrics& m, bool with_path) {
+                    const slam::SlamMetrics& m, bool with_nees, bool with_path) {
   const auto& st = run.stats;
   RunRecord r = {m.error_percent,
                  m.error_aligned_percent,
@@ -136,8 +137,9 @@ RunRecord to_record(const slam::SlamDataset& d, const slam::SlamRun& run,
   auto append = [&r](std::size_t count) { r.push_back(static_cast<double>(count)); };
   append(d.name.size());
   for (const char c : d.name) r.push_back(static_cast<double>(c));
-  append(m.nees.size());
-  r.insert(r.end(), m.nees.begin(), m.nees.end());
+  // The NEES per step (one number per step and run) only where it is summarised.
+  append(with_nees ? m.nees.size() : 0);
+  if (with_nees) r.insert(r.end(), m.nees.begin(), m.nees.end());
   append(with_path ? run.path.size() : 0);
   if (with_path)
     for (const auto& p : run.path) r.insert(r.end(), {p(0), p(1), p(2)});
@@ -266,7 +268,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     opt.motion.laser_forward = data.vehicle.laser_forward;
     opt.motion.laser_left = data.vehicle.laser_left;
     const slam::SlamRun run = slam::run_filter(data, opt);
-    RunRecord r = to_record(data, run, slam::evaluate(data, run), i == 0);
+    RunRecord r = to_record(data, run, slam::evaluate(data, run), consistent, i == 0);
     bar.tick();
     return r;
   });

@@ -18,6 +18,7 @@
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
+#include "implicit/core/version.hpp"
 #include "transport/transport.hpp"
 
 namespace implicit::app {
@@ -144,8 +145,10 @@ long failing_run() {
   return s == nullptr ? -1 : std::strtol(s, nullptr, 10);
 }
 
+// Called on TBB's threads: no MPI here (the ranks are started with MPI_THREAD_FUNNELED).
 void run_one(std::size_t i, const std::function<RunRecord(std::size_t)>& run,
-             std::vector<Outcome>& outcomes, const fs::path& folder, const std::string& key) {
+             std::vector<Outcome>& outcomes, const fs::path& folder, const std::string& key,
+             const std::string& where) {
   Outcome& o = outcomes[i];
   try {
     if (static_cast<long>(i) == failing_run())
@@ -159,7 +162,7 @@ void run_one(std::size_t i, const std::function<RunRecord(std::size_t)>& run,
     o.failed = true;
     o.error = "unknown exception";
   }
-  if (transport::size() > 1) o.error = fmt::format("{} (rank {})", o.error, transport::rank());
+  if (o.failed) o.error += where;
   o.done = true;
 }
 
@@ -171,12 +174,14 @@ void compute_share(std::vector<Outcome>& outcomes, const std::function<RunRecord
     if (!outcomes[i].done) todo.push_back(i);
   const auto ranks = static_cast<std::size_t>(transport::size());
   const auto me = static_cast<std::size_t>(transport::rank());
+  const std::string where = ranks > 1 ? fmt::format(" (rank {})", me) : "";
   if (!dynamic_schedule() || ranks == 1) {
     // Static: run todo[k] on rank k mod N.
     std::vector<std::size_t> mine;
     for (std::size_t k = me; k < todo.size(); k += ranks) mine.push_back(todo[k]);
     parallel_for(
-        mine.size(), [&](std::size_t k) { run_one(mine[k], run, outcomes, folder, key); }, 1);
+        mine.size(), [&](std::size_t k) { run_one(mine[k], run, outcomes, folder, key, where); },
+        1);
     return;
   }
   // Dynamic: take as many runs as this rank has threads, compute them, take the next ones; a
@@ -189,7 +194,8 @@ void compute_share(std::vector<Outcome>& outcomes, const std::function<RunRecord
     if (first >= todo.size()) break;
     const std::size_t count = std::min<std::size_t>(chunk, todo.size() - first);
     parallel_for(
-        count, [&](std::size_t k) { run_one(todo[first + k], run, outcomes, folder, key); }, 1);
+        count, [&](std::size_t k) { run_one(todo[first + k], run, outcomes, folder, key, where); },
+        1);
   }
 }
 
@@ -198,7 +204,9 @@ void compute_share(std::vector<Outcome>& outcomes, const std::function<RunRecord
 std::vector<RunRecord> distribute_runs(const RunContext& ctx, const std::string& experiment,
                                        const std::string& settings, std::size_t n,
                                        const std::function<RunRecord(std::size_t)>& run) {
-  const std::string key = fmt::format("{} {} runs={}", experiment, settings, n);
+  // A record is reused only by the same build: another commit may compute other numbers.
+  const std::string key =
+      fmt::format("{} {} runs={} commit={} format=1", experiment, settings, n, git_commit());
   require(!ctx.resume || !g_resume_root.empty(),
           "--resume: expected --out (the folder whose .resume/ keeps the finished runs), got none");
   fs::path folder;
