@@ -3,7 +3,8 @@
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 OUT ?= out
-CMAKE_FLAGS ?=
+# The MPI build (docs/cluster.md) is on here, so that `make test` checks it against one process.
+CMAKE_FLAGS ?= -DIMPLICIT_WITH_MPI=ON
 # The sanitizer and fuzzing build (clang++ 14, ASan + UBSan, libFuzzer): docs/design.md, "Reliability".
 SANITIZE_DIR ?= build-sanitize
 SANITIZE_CXX ?= clang++-14
@@ -45,7 +46,7 @@ configure-sanitize: deps
 	@CXX=$(SANITIZE_CXX) cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=Sanitize \
 	  -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -gline-tables-only" -DIMPLICIT_SANITIZE=ON \
 	  -DIMPLICIT_BUILD_FUZZERS=ON -DIMPLICIT_BUILD_BENCHMARKS=OFF -DIMPLICIT_BUILD_PYTHON=OFF \
-	  -DIMPLICIT_BUILD_EXAMPLES=OFF $(CMAKE_FLAGS) > /dev/null
+	  -DIMPLICIT_BUILD_EXAMPLES=OFF $(CMAKE_FLAGS) -DIMPLICIT_WITH_MPI=OFF > /dev/null
 
 test-sanitize: configure-sanitize
 	@cmake --build $(SANITIZE_DIR) -j $(JOBS) --target $(SANITIZE_TARGETS)

@@ -25,6 +25,7 @@
 #include "implicit/build_info.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
+#include "parallel_runs.hpp"
 #include "registry.hpp"
 #include "report.hpp"
 
@@ -475,7 +476,9 @@ int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt) {
   write_text(dir / "results.json", results.dump(2) + "\n");
   gather_summaries(results, dir, "mcl_summary.csv");
   gather_summaries(results, dir, "slam_summary.csv");
-  results["figures"] = draw_figures(results, dir, opt.no_figures, ctx.show_progress());
+  // Under MPI only rank 0's figures are kept (apps/parallel_runs.hpp): the others draw none.
+  results["figures"] =
+      draw_figures(results, dir, opt.no_figures || rank_index() != 0, ctx.show_progress());
   write_text(dir / "results.json", results.dump(2) + "\n");
   const auto doc = report::build_report(results, dir);
   write_text(dir / "report.md", doc.markdown());

@@ -275,6 +275,9 @@ void add_common_options(CLI::App& sub, RunContext& ctx) {
       ->check(in_range(0, 1024))
       ->capture_default_str();
   sub.add_flag("--quiet", ctx.quiet, "No progress output on stderr");
+  sub.add_flag("--resume", ctx.resume,
+               "Skip the runs finished by an earlier, interrupted or failed command with the same "
+               "--out and settings (kept in OUT/.resume)");
 }
 
 void set_examples(CLI::App& sub, const std::vector<std::string>& commands) {

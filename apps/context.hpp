@@ -58,6 +58,7 @@ struct RunContext {
   int threads = 0;                ///< 0 = all cores
   bool quiet = false;             ///< no progress output
   bool json = false;              ///< --json mode: nothing extra on stderr either
+  bool resume = false;            ///< reuse the runs kept in out_dir/.resume (parallel_runs.hpp)
 
   bool show_progress() const { return !quiet && !json; }
   /// Path of a CSV file in out_dir (creates the folder); empty path when out_dir is empty.
@@ -114,7 +115,7 @@ class Validator;
 }  // namespace CLI
 
 namespace implicit::app {
-/// Adds the options every subcommand shares: --seed, --json, --out, --threads, --quiet.
+/// Adds the options every subcommand shares: --seed, --json, --out, --threads, --quiet, --resume.
 /// Set ctx.out_dir before the call to give --out a default (shown in --help).
 void add_common_options(CLI::App& sub, RunContext& ctx);
 

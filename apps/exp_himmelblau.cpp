@@ -14,8 +14,47 @@
 #include "implicit/control/himmelblau.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
+#include "parallel_runs.hpp"
 
 namespace implicit::app {
+namespace {
+
+// A run as numbers that travel between ranks (parallel_runs.hpp): the scalars, then x and u.
+RunRecord to_record(const control::HimmelblauRun& run) {
+  RunRecord r = {run.cost,
+                 run.final_f,
+                 run.ess_mean,
+                 static_cast<double>(run.failed_minimizations),
+                 run.last_noise(0),
+                 run.last_noise(1),
+                 run.max_laplace_gap,
+                 static_cast<double>(run.x.size()),
+                 static_cast<double>(run.u.size())};
+  for (const auto* path : {&run.x, &run.u})
+    for (const auto& v : *path) r.insert(r.end(), {v(0), v(1)});
+  return r;
+}
+
+control::HimmelblauRun from_record(const RunRecord& r) {
+  control::HimmelblauRun run;
+  run.cost = r.at(0);
+  run.final_f = r.at(1);
+  run.ess_mean = r.at(2);
+  run.failed_minimizations = static_cast<int>(r.at(3));
+  run.last_noise = Vec<2>(r.at(4), r.at(5));
+  run.max_laplace_gap = r.at(6);
+  run.x.resize(static_cast<std::size_t>(r.at(7)));
+  run.u.resize(static_cast<std::size_t>(r.at(8)));
+  std::size_t at = 9;
+  for (auto* path : {&run.x, &run.u})
+    for (auto& v : *path) {
+      v = Vec<2>(r.at(at), r.at(at + 1));
+      at += 2;
+    }
+  return run;
+}
+
+}  // namespace
 
 nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx) {
   const auto start = std::chrono::steady_clock::now();
@@ -28,13 +67,14 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
   std::vector<control::HimmelblauRun> runs(static_cast<std::size_t>(s.runs));
   {
     Progress progress(fmt::format("himmelblau M={}", s.samples), runs.size(), ctx.show_progress());
-    parallel_for(
-        runs.size(),
+    const auto records = distribute_runs(
+        ctx, "himmelblau", fmt::format("seed={} M={}", ctx.seed, s.samples), runs.size(),
         [&](std::size_t r) {
-          runs[r] = control::simulate_himmelblau_run(pb, s.samples, ctx.seed, r);
+          auto record = to_record(control::simulate_himmelblau_run(pb, s.samples, ctx.seed, r));
           progress.tick();
-        },
-        1);
+          return record;
+        });
+    for (std::size_t r = 0; r < runs.size(); ++r) runs[r] = from_record(records[r]);
     progress.finish();
   }
   // Closed-form expectations (discrete Brownian bridge to x*, see himmelblau_bridge_reference)

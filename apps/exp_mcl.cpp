@@ -19,6 +19,7 @@
 #include "implicit/filter/localization.hpp"
 #include "implicit/robot/carpark.hpp"
 #include "implicit/robot/csv_table.hpp"
+#include "parallel_runs.hpp"
 
 namespace implicit::app {
 namespace {
@@ -215,41 +216,65 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   std::vector<double> err, rmse, hrmse, ess, cpu, used, dropped, newton, max_err, resamplings,
       min_loglik;
   int lost = 0, fallbacks = 0, failures = 0;
-  std::vector<LocalizationRun> kept;  // for the trajectory CSV of the median run
   Progress bar(fmt::format("mcl {} M={}", s.method, s.particles), static_cast<std::size_t>(s.runs),
                ctx.show_progress());
-  for (int r = 0; r < s.runs; ++r) {
+  auto run_number = [&](std::size_t r) {
     // Every particle's randomness comes from Rng({seed * runs + run, step, particle, purpose}).
-    options.seed = ctx.seed * static_cast<std::uint64_t>(s.runs) + static_cast<std::uint64_t>(r);
-    const LocalizationRun run =
-        s.method == "implicit"
-            ? filter::run_localization(problem, model, sensor, implicit_proposal, options)
-            : filter::run_localization(problem, model, sensor, filter::BootstrapProposal{},
-                                       options);
-    const LocalizationMetrics m =
-        filter::localization_metrics(run, problem.truth, options.particles);
-    err.push_back(m.error_percent);
-    rmse.push_back(m.rmse);
-    if (std::isfinite(m.heading_rmse)) hrmse.push_back(m.heading_rmse);
-    ess.push_back(m.ess_fraction);
-    cpu.push_back(1e3 * run.cpu_seconds / static_cast<double>(run.steps.size()));
-    wall.push_back(1e3 * run.seconds / static_cast<double>(run.steps.size()));
-    used.push_back(m.detections_used);
-    dropped.push_back(m.detections_dropped);
-    newton.push_back(m.newton_evaluations);
-    max_err.push_back(m.max_error);
-    resamplings.push_back(run.resamplings);
-    min_loglik.push_back(m.min_log_likelihood_increment);
-    lost += m.max_error > 5.0 ? 1 : 0;
-    fallbacks += m.fallbacks;
-    failures += m.failures;
-    if (!ctx.out_dir.empty()) kept.push_back(run);
-    bar.tick();
-  }
+    filter::FilterOptions o = options;
+    o.seed = ctx.seed * static_cast<std::uint64_t>(s.runs) + static_cast<std::uint64_t>(r);
+    return s.method == "implicit"
+               ? filter::run_localization(problem, model, sensor, implicit_proposal, o)
+               : filter::run_localization(problem, model, sensor, filter::BootstrapProposal{}, o);
+  };
+  const std::string settings = fmt::format(
+      "seed={} method={} M={} config={} p={:a} q={:a} map={} clutter={} sigma2={} truth={} "
+      "gps_std={:a} reference_M={} data={}",
+      ctx.seed, s.method, s.particles, s.config, p, params.state_std(0), s.map, s.clutter, s.sigma2,
+      s.truth, s.gps_std, s.reference_particles, s.data_dir);
+  const auto records =
+      distribute_runs(ctx, "mcl", settings, static_cast<std::size_t>(s.runs), [&](std::size_t r) {
+        const LocalizationRun run = run_number(r);
+        const LocalizationMetrics m =
+            filter::localization_metrics(run, problem.truth, options.particles);
+        const auto steps = static_cast<double>(run.steps.size());
+        bar.tick();
+        return RunRecord{m.error_percent,
+                         m.rmse,
+                         m.heading_rmse,
+                         m.ess_fraction,
+                         1e3 * run.cpu_seconds / steps,
+                         1e3 * run.seconds / steps,
+                         static_cast<double>(m.detections_used),
+                         static_cast<double>(m.detections_dropped),
+                         static_cast<double>(m.newton_evaluations),
+                         m.max_error,
+                         static_cast<double>(run.resamplings),
+                         m.min_log_likelihood_increment,
+                         static_cast<double>(m.fallbacks),
+                         static_cast<double>(m.failures)};
+      });
   bar.finish();
-  if (!ctx.out_dir.empty()) {
+  for (const auto& v : records) {
+    err.push_back(v.at(0));
+    rmse.push_back(v.at(1));
+    if (std::isfinite(v.at(2))) hrmse.push_back(v.at(2));
+    ess.push_back(v.at(3));
+    cpu.push_back(v.at(4));
+    wall.push_back(v.at(5));
+    used.push_back(v.at(6));
+    dropped.push_back(v.at(7));
+    newton.push_back(v.at(8));
+    max_err.push_back(v.at(9));
+    resamplings.push_back(v.at(10));
+    min_loglik.push_back(v.at(11));
+    lost += v.at(9) > 5.0 ? 1 : 0;
+    fallbacks += static_cast<int>(v.at(12));
+    failures += static_cast<int>(v.at(13));
+  }
+  // Only rank 0 writes (parallel_runs.hpp), and only the file needs the whole run.
+  if (!ctx.out_dir.empty() && rank_index() == 0) {
     // The run with the median err% (the lower median for an even count): a typical run, not the
-    // luckiest or a lost one.
+    // luckiest or a lost one. Recomputed: its result depends only on its number.
     std::vector<std::size_t> order(err.size());
     std::iota(order.begin(), order.end(), std::size_t{0});
     std::sort(order.begin(), order.end(),
@@ -258,7 +283,7 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
     std::string name = fmt::format("mcl_{}_M{}", s.method, s.particles);
     if (s.config != "A" || s.p >= 0) name += fmt::format("_config{}", s.config);
     if (s.p >= 0) name += fmt::format("_p{}", s.p);
-    write_trajectory(ctx.csv_path(name + "_trajectory.csv"), problem, kept[median_run]);
+    write_trajectory(ctx.csv_path(name + "_trajectory.csv"), problem, run_number(median_run));
   }
 
   // Dead reckoning from the prior mean: the error with no laser at all.

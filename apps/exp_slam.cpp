@@ -21,6 +21,7 @@
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/evaluate.hpp"
 #include "implicit/slam/slam_filter.hpp"
+#include "parallel_runs.hpp"
 
 namespace implicit::app {
 namespace {
@@ -107,6 +108,91 @@ void write_csv_outputs(const RunContext& ctx, const std::string& stem, const sla
   }
 }
 
+// What the summary needs of one run, as numbers that travel between ranks (parallel_runs.hpp).
+// Run 0 also carries its path and map, for the CSV files; with the consistent truth, every run
+// carries its NEES per step, for the band.
+struct RunSummary {
+  std::string name;
+  std::size_t steps = 0;
+  slam::SlamMetrics metrics;
+  slam::SlamRun run;  // stats, wall time, map bytes; path and map of run 0 only
+};
+
+RunRecord to_record(const slam::SlamDataset& d, const slam::SlamRun& run,
+                    const slam::SlamMetrics& m, bool with_nees, bool with_path) {
+  const auto& st = run.stats;
+  RunRecord r = {m.error_percent,
+                 m.error_aligned_percent,
+                 m.rmse_pose_m,
+                 m.rmse_pose_aligned_m,
+                 m.rmse_heading_rad,
+                 m.rmse_map_m,
+                 m.map_shape_m,
+                 m.nees_mean,
+                 static_cast<double>(m.landmarks),
+                 st.ess_fraction_sum,
+                 static_cast<double>(st.weighted_steps),
+                 static_cast<double>(st.resamplings),
+                 static_cast<double>(st.newton_iterations),
+                 static_cast<double>(st.newton_solves),
+                 static_cast<double>(st.skipped),
+                 static_cast<double>(run.map_bytes),
+                 run.wall_seconds,
+                 static_cast<double>(d.steps())};
+  auto append = [&r](std::size_t count) { r.push_back(static_cast<double>(count)); };
+  append(d.name.size());
+  for (const char c : d.name) r.push_back(static_cast<double>(c));
+  // The NEES per step (one number per step and run) only where it is summarised.
+  append(with_nees ? m.nees.size() : 0);
+  if (with_nees) r.insert(r.end(), m.nees.begin(), m.nees.end());
+  append(with_path ? run.path.size() : 0);
+  if (with_path)
+    for (const auto& p : run.path) r.insert(r.end(), {p(0), p(1), p(2)});
+  append(with_path ? run.map.landmarks.size() : 0);
+  if (with_path)
+    for (std::size_t k = 0; k < run.map.landmarks.size(); ++k)
+      r.insert(r.end(), {static_cast<double>(run.map.ids[k]), run.map.landmarks[k](0),
+                         run.map.landmarks[k](1)});
+  return r;
+}
+
+RunSummary from_record(const RunRecord& r) {
+  RunSummary out;
+  auto& m = out.metrics;
+  auto& st = out.run.stats;
+  std::size_t at = 0;
+  auto next = [&] { return r.at(at++); };
+  auto count = [&] { return static_cast<std::size_t>(next()); };
+  for (double* v :
+       {&m.error_percent, &m.error_aligned_percent, &m.rmse_pose_m, &m.rmse_pose_aligned_m,
+        &m.rmse_heading_rad, &m.rmse_map_m, &m.map_shape_m, &m.nees_mean})
+    *v = next();
+  m.landmarks = count();
+  st.ess_fraction_sum = next();
+  st.weighted_steps = count();
+  st.resamplings = count();
+  st.newton_iterations = count();
+  st.newton_solves = count();
+  st.skipped = count();
+  out.run.map_bytes = count();
+  out.run.wall_seconds = next();
+  out.steps = count();
+  out.name.resize(count());
+  for (auto& c : out.name) c = static_cast<char>(next());
+  m.nees.resize(count());
+  for (auto& v : m.nees) v = next();
+  out.run.path.resize(count());
+  for (auto& p : out.run.path)
+    for (int c = 0; c < 3; ++c) p(c) = next();  // in order (argument order is unspecified)
+  const std::size_t landmarks = count();
+  for (std::size_t k = 0; k < landmarks; ++k) {
+    out.run.map.ids.push_back(static_cast<int>(next()));
+    const double x = next();
+    out.run.map.landmarks.push_back(slam::Landmark(x, next()));
+  }
+  return out;
+}
+
 }  // namespace
 
 nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
@@ -158,45 +244,50 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
       scenario = slam::make_dense_scenario(scenario, s.dense_laps, s.dense_landmarks, ctx.seed);
   }
   const auto k_runs = static_cast<std::size_t>(s.datasets);
-  std::vector<slam::SlamDataset> data(k_runs);
-  std::vector<slam::SlamRun> runs(k_runs);
-  std::vector<slam::SlamMetrics> metrics(k_runs);
+  std::vector<RunSummary> runs(k_runs);
   Progress bar(fmt::format("SLAM {} M={}", s.method, particles), k_runs, ctx.show_progress());
   const double cpu0 = cpu_seconds();
-  parallel_for(
-      k_runs,
-      [&](std::size_t i) {
-        const std::uint64_t seed = ctx.seed + i;
-        if (logs.empty()) {
-          slam::SyntheticConfig cfg;
-          cfg.truth = consistent ? slam::TruthMode::kConsistent : slam::TruthMode::kPaper;
-          cfg.laser_every = s.laser_every;
-          cfg.motion = base.motion;
-          data[i] = slam::generate_synthetic(scenario, cfg, seed);
-        } else {
-          data[i] = logs[i % logs.size()];
-        }
-        slam::SlamOptions opt = base;
-        opt.seed = seed;
-        opt.motion.dt = data[i].vehicle.dt;
-        opt.motion.wheelbase = data[i].vehicle.wheelbase;
-        opt.motion.encoder_offset = data[i].vehicle.encoder_offset;
-        opt.motion.laser_forward = data[i].vehicle.laser_forward;
-        opt.motion.laser_left = data[i].vehicle.laser_left;
-        runs[i] = slam::run_filter(data[i], opt);
-        metrics[i] = slam::evaluate(data[i], runs[i]);
-        bar.tick();
-      },
-      1);
+  // Data set i and its filter run depend only on i (seed + i), so the runs can be anywhere.
+  const std::string settings = fmt::format(
+      "seed={} method={} M={} association={} truth={} laser_every={} noise_scale={:a} "
+      "dense={}x{} min_range={:a} control_noise={:a} range_sd={:a} bearing_sd={:a} gate={:a} "
+      "p0={:a} data={}",
+      ctx.seed, s.method, particles, s.association, s.truth, s.laser_every,
+      s.consistent_noise_scale, s.dense_landmarks, s.dense_laps, s.min_range, s.control_noise,
+      s.range_sd, s.bearing_sd_deg, s.gate_chi2, s.new_landmark_density, s.data_dir);
+  auto dataset = [&](std::size_t i) {
+    if (!logs.empty()) return logs[i % logs.size()];
+    slam::SyntheticConfig cfg;
+    cfg.truth = consistent ? slam::TruthMode::kConsistent : slam::TruthMode::kPaper;
+    cfg.laser_every = s.laser_every;
+    cfg.motion = base.motion;
+    return slam::generate_synthetic(scenario, cfg, ctx.seed + i);
+  };
+  const auto records = distribute_runs(ctx, "slam", settings, k_runs, [&](std::size_t i) {
+    const slam::SlamDataset data = dataset(i);
+    slam::SlamOptions opt = base;
+    opt.seed = ctx.seed + i;
+    opt.motion.dt = data.vehicle.dt;
+    opt.motion.wheelbase = data.vehicle.wheelbase;
+    opt.motion.encoder_offset = data.vehicle.encoder_offset;
+    opt.motion.laser_forward = data.vehicle.laser_forward;
+    opt.motion.laser_left = data.vehicle.laser_left;
+    const slam::SlamRun run = slam::run_filter(data, opt);
+    RunRecord r = to_record(data, run, slam::evaluate(data, run), consistent, i == 0);
+    bar.tick();
+    return r;
+  });
+  for (std::size_t i = 0; i < k_runs; ++i) runs[i] = from_record(records[i]);
   bar.finish();
   const double cpu = cpu_seconds() - cpu0;
+  const slam::SlamDataset data0 = dataset(0);  // the data of the run the CSV files show
 
   std::vector<double> err, err_al, rmse_p, rmse_pa, rmse_h, rmse_m, shape, ess, res, nees, lms,
       mapbytes, newton;
   std::size_t steps = 0, skipped = 0, scored_min = std::numeric_limits<std::size_t>::max();
   for (std::size_t i = 0; i < k_runs; ++i) {
-    const auto& m = metrics[i];
-    const auto& st = runs[i].stats;
+    const auto& m = runs[i].metrics;
+    const auto& st = runs[i].run.stats;
     err.push_back(m.error_percent);
     err_al.push_back(m.error_aligned_percent);
     rmse_p.push_back(m.rmse_pose_m);
@@ -208,11 +299,11 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     res.push_back(static_cast<double>(st.resamplings));
     nees.push_back(m.nees_mean);
     lms.push_back(static_cast<double>(m.landmarks));
-    mapbytes.push_back(static_cast<double>(runs[i].map_bytes));
+    mapbytes.push_back(static_cast<double>(runs[i].run.map_bytes));
     if (st.newton_solves > 0)
       newton.push_back(static_cast<double>(st.newton_iterations) /
                        static_cast<double>(st.newton_solves));
-    steps += data[i].steps();
+    steps += runs[i].steps;
     skipped += st.skipped;
     scored_min = std::min(scored_min, m.scored_steps);
   }
@@ -223,7 +314,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["association"] = s.association;
   j["truth"] = logs.empty() ? s.truth : "log";
   j["data"] =
-      logs.empty() ? (s.dense_landmarks > 0 ? scenario.name : "carpark-synthetic") : data[0].name;
+      logs.empty() ? (s.dense_landmarks > 0 ? scenario.name : "carpark-synthetic") : data0.name;
   j["laser_every"] = s.laser_every;
   // The filter's model, so that a run on real data can be repeated from its JSON alone.
   j["control_noise"] = s.control_noise;
@@ -255,12 +346,12 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     const double lo = slam::chi_square_quantile(0.025, 3 * kk) / kk;
     const double hi = slam::chi_square_quantile(0.975, 3 * kk) / kk;
     std::size_t inside = 0, total = 0;
-    const std::size_t n_steps = data[0].steps();
+    const std::size_t n_steps = data0.steps();
     for (std::size_t n = 1; n <= n_steps; ++n) {
       double sum = 0.0;
       bool ok = true;
       for (std::size_t i = 0; i < k_runs && ok; ++i) {
-        const auto& v = metrics[i].nees;
+        const auto& v = runs[i].metrics.nees;
         ok = n < v.size() && std::isfinite(v[n]);
         if (ok) sum += v[n];
       }
@@ -273,7 +364,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
         total > 0 ? static_cast<double>(inside) / static_cast<double>(total) : 0.0;
   }
   j["cpu_ms_per_step"] = 1e3 * cpu / static_cast<double>(steps);
-  j["steps_per_dataset"] = data[0].steps();
+  j["steps_per_dataset"] = data0.steps();
   j["scored_steps_min"] = scored_min;  // over the data sets; 0: a run had no step with truth
   j["peak_memory_mb"] = peak_memory_mb();
   j["threads"] = active_threads();
@@ -281,7 +372,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
 
   if (!ctx.out_dir.empty()) {
     const std::string stem = fmt::format("slam_{}_M{}", s.method, particles);
-    write_csv_outputs(ctx, stem, data[0], runs[0]);
+    write_csv_outputs(ctx, stem, data0, runs[0].run);
     {
       OutputFile file(ctx.csv_path(stem + "_runs.csv"));
       std::ostream& os = file.stream();
@@ -289,9 +380,9 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
             "ess_mean,resamplings,landmarks,nees_mean,wall_ms_per_step\n";
       for (std::size_t i = 0; i < k_runs; ++i)
         os << fmt::format("{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{:.6g},{:.6g}\n",
-                          data[i].name, ctx.seed + i, err[i], err_al[i], rmse_p[i], rmse_m[i],
+                          runs[i].name, ctx.seed + i, err[i], err_al[i], rmse_p[i], rmse_m[i],
                           shape[i], ess[i], res[i], lms[i], nees[i],
-                          1e3 * runs[i].wall_seconds / static_cast<double>(data[i].steps()));
+                          1e3 * runs[i].run.wall_seconds / static_cast<double>(runs[i].steps));
       file.commit();
     }
     OutputFile summary(ctx.csv_path("slam_summary.csv"), OutputFile::Mode::kAppend);

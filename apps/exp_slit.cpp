@@ -16,6 +16,7 @@
 #include "implicit/control/double_slit.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
+#include "parallel_runs.hpp"
 
 namespace implicit::app {
 
@@ -97,7 +98,27 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
   {
     Progress progress(fmt::format("slit {} M={}", s.mode, s.samples),
                       static_cast<std::size_t>(s.runs), ctx.show_progress());
-    table = control::run_slit_table(slit, opt, [&] { progress.tick(); });
+    const auto records =
+        distribute_runs(ctx, "slit",
+                        fmt::format("seed={} M={} mode={} sampling={}", ctx.seed, s.samples, s.mode,
+                                    static_cast<int>(opt.sampling)),
+                        static_cast<std::size_t>(s.runs), [&](std::size_t r) {
+                          const auto row = control::slit_table_row(slit, opt, r);
+                          progress.tick();
+                          return RunRecord{row.error_x,
+                                           row.error_u,
+                                           row.crashed_exact ? 1.0 : 0.0,
+                                           row.crashed_estimate ? 1.0 : 0.0,
+                                           static_cast<double>(row.fallbacks),
+                                           row.ess_mean};
+                        });
+    std::vector<control::SlitTableRow> rows(records.size());
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      const auto& v = records[r];
+      rows[r] = {v.at(0), v.at(1), v.at(2) != 0.0, v.at(3) != 0.0, static_cast<int>(v.at(4)),
+                 v.at(5)};
+    }
+    table = control::summarise_slit_table(std::move(rows));
     progress.finish();
   }
 

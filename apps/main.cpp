@@ -12,6 +12,7 @@
 
 #include "context.hpp"
 #include "implicit/core/version.hpp"
+#include "parallel_runs.hpp"
 #include "registry.hpp"
 
 namespace implicit::app {
@@ -21,7 +22,8 @@ std::vector<Subcommand>& subcommands() {
 }
 }  // namespace implicit::app
 
-int main(int argc, char** argv) {
+namespace {
+int run_command(int argc, char** argv) {
   using namespace implicit::app;
   CLI::App app{
       "implicit: implicit sampling for path integral control, Monte Carlo localization "
@@ -67,4 +69,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Under an MPI launcher every rank runs the command; see apps/parallel_runs.hpp.
+  implicit::app::RankSession session(argc, argv);
+  return session.finish(run_command(session.argc(), session.argv()));
 }

@@ -539,26 +539,22 @@ void mean_std(const std::vector<double>& v, double& mean, double& sd) {
 }
 }  // namespace
 
-SlitTable run_slit_table(const DoubleSlit& slit, const SlitTableOptions& o,
-                         const std::function<void()>& on_run_done) {
-  require(o.runs >= 1, "double slit table: expected at least 1 run, got {}", o.runs);
-  require(o.samples >= 1, "double slit table: expected at least 1 sample, got {}", o.samples);
+SlitTableRow slit_table_row(const DoubleSlit& slit, const SlitTableOptions& o, std::uint64_t run) {
+  const SlitRun r = simulate_slit_run(slit, o.samples, o.estimator, o.seed, run, o.sampling);
+  SlitTableRow row;
+  row.error_x = r.error_x;
+  row.error_u = r.error_u;
+  row.crashed_exact = r.crashed_exact;
+  row.crashed_estimate = r.crashed_estimate;
+  row.fallbacks = r.fallbacks;
+  row.ess_mean = r.ess_mean;
+  return row;
+}
+
+SlitTable summarise_slit_table(std::vector<SlitTableRow> rows) {
+  require(!rows.empty(), "double slit table: expected at least 1 run, got 0");
   SlitTable t;
-  t.runs.resize(static_cast<std::size_t>(o.runs));
-  parallel_for(
-      static_cast<std::size_t>(o.runs),
-      [&](std::size_t r) {
-        const SlitRun run = simulate_slit_run(slit, o.samples, o.estimator, o.seed, r, o.sampling);
-        SlitTableRow& row = t.runs[r];
-        row.error_x = run.error_x;
-        row.error_u = run.error_u;
-        row.crashed_exact = run.crashed_exact;
-        row.crashed_estimate = run.crashed_estimate;
-        row.fallbacks = run.fallbacks;
-        row.ess_mean = run.ess_mean;
-        if (on_run_done) on_run_done();
-      },
-      1);
+  t.runs = std::move(rows);
   std::vector<double> ex, eu;
   for (const auto& row : t.runs) {
     ex.push_back(row.error_x);
@@ -568,7 +564,7 @@ SlitTable run_slit_table(const DoubleSlit& slit, const SlitTableOptions& o,
     t.fallbacks += row.fallbacks;
     t.ess_mean += row.ess_mean;
   }
-  const double R = static_cast<double>(o.runs);
+  const double R = static_cast<double>(t.runs.size());
   t.crash_fraction /= R;
   t.exact_crash_fraction /= R;
   t.ess_mean /= R;
@@ -577,6 +573,21 @@ SlitTable run_slit_table(const DoubleSlit& slit, const SlitTableOptions& o,
   t.error_x_median = median(ex);
   t.error_u_median = median(eu);
   return t;
+}
+
+SlitTable run_slit_table(const DoubleSlit& slit, const SlitTableOptions& o,
+                         const std::function<void()>& on_run_done) {
+  require(o.runs >= 1, "double slit table: expected at least 1 run, got {}", o.runs);
+  require(o.samples >= 1, "double slit table: expected at least 1 sample, got {}", o.samples);
+  std::vector<SlitTableRow> rows(static_cast<std::size_t>(o.runs));
+  parallel_for(
+      rows.size(),
+      [&](std::size_t r) {
+        rows[r] = slit_table_row(slit, o, r);
+        if (on_run_done) on_run_done();
+      },
+      1);
+  return summarise_slit_table(std::move(rows));
 }
 
 }  // namespace implicit::control

@@ -254,4 +254,11 @@ struct SlitTable {
 SlitTable run_slit_table(const DoubleSlit& slit, const SlitTableOptions& options,
                          const std::function<void()>& on_run_done = {});
 
+/// Run `run` of run_slit_table alone (its row depends on nothing else), and the table from its
+/// rows in run order: run_slit_table is summarise_slit_table of every slit_table_row. For callers
+/// that spread the runs further (apps/parallel_runs.hpp).
+SlitTableRow slit_table_row(const DoubleSlit& slit, const SlitTableOptions& options,
+                            std::uint64_t run);
+SlitTable summarise_slit_table(std::vector<SlitTableRow> rows);
+
 }  // namespace implicit::control

@@ -1,0 +1,66 @@
+#pragma once
+// The independent runs of an experiment (seeds, data sets), spread over the processes of an MPI
+// job and the threads of each process, with every result the same as in one process.
+//
+// Every process ("rank") executes the whole command; distribute_runs() is the one place where
+// they divide the work: each rank computes some runs (static: run i on rank i mod N; dynamic:
+// ranks take the next runs from a shared counter as they finish), then every rank receives every
+// run's record, so the aggregation after the loop is the same code on the same numbers everywhere
+// and the JSON, CSV and report of rank 0 equal those of a single process. Ranks other than 0
+// write into a private temporary folder and print nothing.
+//
+//   const auto records = distribute_runs(ctx, "slam", settings_text, n, [&](std::size_t i) {
+//     const auto m = evaluate(run_filter(data(i), seed + i));
+//     return RunRecord{m.error_percent, m.rmse_map_m};
+//   });
+//
+// A record is the numbers of one run, moved bit-exactly (binary between ranks, hexadecimal
+// floating point in files). When --out is set, each record is also written to
+// <out>/.resume/<experiment>-<hash>/<run>.rec as soon as its run finishes; with --resume those
+// runs are read back instead of being recomputed. A run that throws does not stop the others:
+// after the loop, distribute_runs throws one error naming every failed run and its message.
+
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "context.hpp"
+
+namespace implicit::app {
+
+using RunRecord = std::vector<double>;
+
+/// Runs run(i) for i in [0, n) over the ranks and threads; returns the n records in run order.
+/// `experiment` and `settings` identify the loop for --resume (settings: every option the records
+/// depend on, including the seed). Throws after the loop if any run threw.
+std::vector<RunRecord> distribute_runs(const RunContext& ctx, const std::string& experiment,
+                                       const std::string& settings, std::size_t n,
+                                       const std::function<RunRecord(std::size_t)>& run);
+
+/// The process's place in the job: MPI is started when the program runs under an MPI launcher
+/// (mpirun, srun) in a build with IMPLICIT_WITH_MPI, and stopped by finish(). On ranks other
+/// than 0 the command line's --out is replaced by a private temporary folder and stdout and
+/// stderr are silenced; argv() is the command line to parse.
+class RankSession {
+ public:
+  RankSession(int argc, char** argv);
+  ~RankSession();
+  RankSession(const RankSession&) = delete;
+  RankSession& operator=(const RankSession&) = delete;
+  int argc() const { return static_cast<int>(pointers_.size()) - 1; }
+  char** argv() { return pointers_.data(); }
+  /// The exit code of the job: `code` on every rank; a rank that fails alone stops the job.
+  int finish(int code);
+
+ private:
+  std::vector<std::string> args_;
+  std::vector<char*> pointers_;
+  std::string private_dir_;
+};
+
+/// Rank of this process and number of ranks (0 and 1 without MPI).
+int rank_index();
+int rank_count();
+
+}  // namespace implicit::app
