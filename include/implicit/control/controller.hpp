@@ -1,0 +1,103 @@
+#pragma once
+// The path integral controller: u = gamma R^-1 G^T grad log psi by central differences of an
+// estimator (estimators.hpp) with common random numbers, and the receding-horizon closed loop.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "implicit/control/estimators.hpp"
+#include "implicit/core/error.hpp"
+#include "implicit/core/minimize.hpp"
+#include "implicit/core/rng.hpp"
+#include "implicit/core/types.hpp"
+
+namespace implicit::control {
+
+template <int P>
+struct ControlEstimate {
+  Vec<P> u = Vec<P>::Zero();
+  PsiEstimate psi;      ///< at x
+  bool defined = true;  ///< false if log psi_hat was -inf at some x +- h e_i
+  MinimizeStatus worst_status = MinimizeStatus::kConverged;
+};
+
+/// u = gamma R^-1 G^T grad log psi_hat by central differences with common random numbers: the
+/// same reference variables at x + h e_i and x - h e_i, minimisers warm-started at mu(x).
+template <typename Problem>
+ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
+                                                       const Vec<Problem::kStateDim>& x, int k,
+                                                       const EstimatorOptions& o,
+                                                       const StreamKey& key) {
+  constexpr int D = Problem::kStateDim;
+  const std::vector<WallMode>* frozen = nullptr;
+  auto psi = [&](const Vec<D>& xp, const Eigen::VectorXd& warm) {
+    return o.method == PsiMethod::kImplicit
+               ? estimate_log_psi_implicit(problem, xp, k, o.samples, key, warm, o.minimize, o.map,
+                                           frozen)
+               : estimate_log_psi_monte_carlo(problem, xp, k, o.samples, key);
+  };
+  ControlEstimate<Problem::kControlDim> c;
+  c.psi = psi(x, Eigen::VectorXd());
+  if (o.freeze_walls && !c.psi.modes.empty()) frozen = &c.psi.modes;
+  c.worst_status = c.psi.status;
+  const double h = o.fd_step * std::max(1.0, x.cwiseAbs().maxCoeff());
+  Vec<D> grad = Vec<D>::Zero();
+  for (int i = 0; i < D; ++i) {
+    Vec<D> xp = x, xm = x;
+    xp(i) += h;
+    xm(i) -= h;
+    const auto ep = psi(xp, c.psi.minimizer), em = psi(xm, c.psi.minimizer);
+    if (ep.status != MinimizeStatus::kConverged) c.worst_status = ep.status;
+    if (em.status != MinimizeStatus::kConverged) c.worst_status = em.status;
+    if (!std::isfinite(ep.log_psi) || !std::isfinite(em.log_psi)) {
+      c.defined = false;
+      continue;
+    }
+    grad(i) = (ep.log_psi - em.log_psi) / (2.0 * h);
+  }
+  c.u = problem.control_from_gradient(grad);
+  return c;
+}
+
+/// Receding-horizon closed loop: x_{k+1} = x_k + (f + G u_k) dt + G Q sqrt(dt) W_k with the
+/// noise realisation `noise` (D x K, columns W_k ~ N(0, I) mapped through Sigma^{1/2}).
+template <typename Problem>
+struct ClosedLoopResult {
+  std::vector<Vec<Problem::kStateDim>> x;
+  std::vector<Vec<Problem::kControlDim>> u;
+  std::vector<PsiEstimate> psi;
+};
+
+template <typename Problem>
+ClosedLoopResult<Problem> simulate_closed_loop(const Problem& problem,
+                                               const Vec<Problem::kStateDim>& x0,
+                                               const Eigen::MatrixXd& noise,
+                                               const EstimatorOptions& o, std::uint64_t seed,
+                                               std::uint64_t run = 0) {
+  constexpr int D = Problem::kStateDim;
+  const int K = problem.num_steps();
+  require(noise.rows() == D && noise.cols() == K,
+          "closed loop: expected a {} x {} noise matrix, got {} x {}", D, K, noise.rows(),
+          noise.cols());
+  ClosedLoopResult<Problem> r;
+  r.x.push_back(x0);
+  const double sdt = std::sqrt(problem.dt());
+  for (int k = 0; k < K; ++k) {
+    const auto c =
+        estimate_control(problem, r.x.back(), k, o, {seed, run, static_cast<std::uint64_t>(k), 0});
+    r.u.push_back(c.u);
+    r.psi.push_back(c.psi);
+    const Vec<D>& x = r.x.back();
+    const Vec<D> w = noise.col(k);
+    r.x.push_back(
+        x + (problem.model().drift(x, problem.time(k)) + problem.spec().G * c.u) * problem.dt() +
+        problem.sigma_sqrt() * w * sdt);
+  }
+  return r;
+}
+
+}  // namespace implicit::control

@@ -1,0 +1,217 @@
+#pragma once
+// The generic path integral control problem: the linear parts (G, Q Q^T, R, horizon, dt) with
+// condition (8), hard walls, and ControlProblem, which binds a user's model to them. See
+// path_integral.hpp for the whole picture and an example.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+#include "implicit/control/path_function.hpp"
+#include "implicit/core/error.hpp"
+#include "implicit/core/types.hpp"
+
+namespace implicit::control {
+
+/// The linear parts of a control problem: D states, P controls.
+template <int D, int P>
+struct ControlSpec {
+  Eigen::Matrix<double, D, P> G = Eigen::Matrix<double, D, P>::Zero();  ///< input matrix
+  Mat<P> noise_covariance = Mat<P>::Identity();  ///< Q Q^T (the noise enters as G Q dW)
+  Mat<P> control_cost = Mat<P>::Identity();      ///< R (symmetric positive definite)
+  double horizon = 1.0;                          ///< tf - t0
+  double dt = 0.01;                              ///< time step; horizon must be a multiple
+};
+
+/// Checks the spec and condition (8); returns gamma and writes Sigma = G Q Q^T G^T. Throws
+/// InvalidArgument naming the problem (dt, horizon, R, Q Q^T, the mismatching entry of (8), or a
+/// singular Sigma).
+template <int D, int P>
+double check_control_spec(const ControlSpec<D, P>& s, Mat<D>* sigma_out = nullptr) {
+  require(std::isfinite(s.dt) && s.dt > 0.0, "control problem: expected dt > 0, got {}", s.dt);
+  const double steps = s.horizon / s.dt;
+  require(
+      std::isfinite(steps) && steps >= 1.0 && std::abs(steps - std::round(steps)) <= 1e-9 * steps,
+      "control problem: expected the horizon to be a positive multiple of dt, got {} / {} = {}",
+      s.horizon, s.dt, steps);
+  require(s.G.allFinite() && s.noise_covariance.allFinite() && s.control_cost.allFinite(),
+          "control problem: expected finite G, Q Q^T and R");
+  const Mat<P>& R = s.control_cost;
+  require((R - R.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (1.0 + R.cwiseAbs().maxCoeff()),
+          "control problem: expected a symmetric control cost R");
+  const Eigen::LLT<Mat<P>> r_llt(R);
+  require(r_llt.info() == Eigen::Success,
+          "control problem: expected a positive definite control cost R, but its Cholesky "
+          "factorisation failed");
+  const Mat<P>& N = s.noise_covariance;
+  require((N - N.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (1.0 + N.cwiseAbs().maxCoeff()),
+          "control problem: expected a symmetric noise covariance Q Q^T");
+  const Eigen::SelfAdjointEigenSolver<Mat<P>> eig(N);
+  const double min_eig = eig.eigenvalues().minCoeff();
+  require(min_eig >= -1e-12 * (1.0 + eig.eigenvalues().cwiseAbs().maxCoeff()),
+          "control problem: expected a positive semi-definite noise covariance Q Q^T, got the "
+          "eigenvalue {}",
+          min_eig);
+  const Mat<D> A = s.G * r_llt.solve(s.G.transpose());  // G R^-1 G^T
+  const Mat<D> B = s.G * N * s.G.transpose();           // G Q Q^T G^T
+  require(A.trace() > 0.0, "control problem: expected a non-zero input matrix G");
+  const double gamma = B.trace() / A.trace();
+  require(gamma > 0.0, "control problem: expected noise acting through G, got G Q Q^T G^T = 0");
+  const Mat<D> mismatch = gamma * A - B;
+  Eigen::Index i = 0, j = 0;
+  const double worst = mismatch.cwiseAbs().maxCoeff(&i, &j);
+  require(worst <= 1e-9 * (1.0 + B.cwiseAbs().maxCoeff()),
+          "control problem: condition (8) gamma G R^-1 G^T = G Q Q^T G^T has no solution: with the "
+          "best gamma = {}, entry ({}, {}) is {} on the left and {} on the right (choose R "
+          "proportional to (Q Q^T)^-1 on the controlled subspace)",
+          gamma, i, j, gamma * A(i, j), B(i, j));
+  const Eigen::LLT<Mat<D>> s_llt(B);
+  require(s_llt.info() == Eigen::Success,
+          "control problem: the noise covariance Sigma = G Q Q^T G^T is singular (noise acts on a "
+          "subspace only); integrate over the noisy coordinates as in robot_arm.hpp");
+  if (sigma_out) *sigma_out = B;
+  return gamma;
+}
+
+/// An opening (lower, upper) of a hard wall; either end may be infinite.
+struct WallOpening {
+  double lower = -std::numeric_limits<double>::infinity();
+  double upper = std::numeric_limits<double>::infinity();
+  bool contains(double v) const { return v > lower && v < upper; }
+};
+
+/// A hard wall: at the grid time `time` the path must have direction^T x(time) inside one of the
+/// `openings` (sorted, disjoint); elsewhere V = +inf. Several walls may be given.
+template <int D>
+struct HardWall {
+  double time = 0.0;                   ///< a grid time in (0, horizon]
+  Vec<D> direction = Vec<D>::Unit(0);  ///< a: the wall tests a^T x (default: coordinate 0)
+  std::vector<WallOpening> openings;   ///< where a^T x may pass
+  bool passes(const Vec<D>& x) const {
+    const double v = direction.dot(x);
+    for (const auto& o : openings)
+      if (o.contains(v)) return true;
+    return false;
+  }
+};
+
+template <int D, int P, typename Model>
+class ControlProblem {
+  // F is a class of its own (path_function.hpp); it reads the model and Sigma^-1 directly.
+  friend class control::PathFunction<D, ControlProblem>;
+
+ public:
+  using PathFunction = control::PathFunction<D, ControlProblem>;
+  static constexpr int kStateDim = D;
+  static constexpr int kControlDim = P;
+
+  /// Throws InvalidArgument for a bad spec (see check_control_spec) or a bad wall (time not a
+  /// grid time in (0, horizon], zero or non-finite direction, no openings, openings empty,
+  /// unsorted or overlapping).
+  ControlProblem(Model model, const ControlSpec<D, P>& spec, std::vector<HardWall<D>> walls = {})
+      : model_(std::move(model)), spec_(spec), walls_(std::move(walls)) {
+    gamma_ = check_control_spec(spec_, &sigma_);
+    sigma_llt_.compute(sigma_);
+    sigma_inv_ = sigma_llt_.solve(Mat<D>::Identity());
+    sigma_sqrt_ = sigma_llt_.matrixL();
+    log_det_sigma_ = 2.0 * sigma_sqrt_.diagonal().array().log().sum();
+    num_steps_ = static_cast<int>(std::round(spec_.horizon / spec_.dt));
+    for (std::size_t j = 0; j < walls_.size(); ++j) {
+      const auto& w = walls_[j];
+      const double r = w.time / spec_.dt, step = std::round(r);
+      require(std::isfinite(r) && std::abs(r - step) <= 1e-9 * std::max(1.0, r) && step >= 1.0 &&
+                  step <= num_steps_,
+              "hard wall {}: expected a time that is a multiple of dt = {} in (0, {}], got {}", j,
+              spec_.dt, spec_.horizon, w.time);
+      require(w.direction.allFinite() && w.direction.norm() > 0.0,
+              "hard wall {}: expected a finite non-zero direction", j);
+      require(!w.openings.empty(), "hard wall {}: expected at least one opening, got none", j);
+      for (std::size_t o = 0; o < w.openings.size(); ++o) {
+        const auto& op = w.openings[o];
+        require(!std::isnan(op.lower) && !std::isnan(op.upper) && op.lower < op.upper,
+                "hard wall {}, opening {}: expected lower < upper, got ({}, {})", j, o, op.lower,
+                op.upper);
+        require(o == 0 || w.openings[o - 1].upper <= op.lower,
+                "hard wall {}, opening {}: expected sorted disjoint openings, got ({}, {}) after "
+                "({}, {})",
+                j, o, op.lower, op.upper, w.openings[o - 1].lower, w.openings[o - 1].upper);
+      }
+      wall_steps_.push_back(static_cast<int>(step));
+    }
+  }
+
+  const Model& model() const { return model_; }
+  const ControlSpec<D, P>& spec() const { return spec_; }
+  double gamma() const { return gamma_; }
+  const Mat<D>& sigma() const { return sigma_; }
+  double dt() const { return spec_.dt; }
+  int num_steps() const { return num_steps_; }
+  double time(int k) const { return k * spec_.dt; }
+  const std::vector<HardWall<D>>& walls() const { return walls_; }
+  /// The grid step of wall j.
+  int wall_step(std::size_t j) const { return wall_steps_[j]; }
+
+  /// True if the path y_1..y_n from (x, t_k) passes every wall at or after t_k (walls at t_k test
+  /// x itself; earlier walls are behind and ignored).
+  bool passes_walls(const Vec<D>& x, int k, const Eigen::VectorXd& y) const {
+    for (std::size_t j = 0; j < walls_.size(); ++j) {
+      const int w = wall_steps_[j] - k;
+      if (w < 0) continue;
+      const Vec<D> at = w == 0 ? x : Vec<D>(y.template segment<D>((w - 1) * D));
+      if (!walls_[j].passes(at)) return false;
+    }
+    return true;
+  }
+
+  /// u = gamma R^-1 G^T grad log psi.
+  Vec<P> control_from_gradient(const Vec<D>& grad_log_psi) const {
+    const Eigen::LLT<Mat<P>> llt(spec_.control_cost);
+    return gamma_ * llt.solve(spec_.G.transpose() * grad_log_psi);
+  }
+
+  /// F over y_1..y_n (n = K - k) from y_0 = x at t_k: a banded target with D x D blocks.
+  PathFunction path_function(const Vec<D>& x, int k) const {
+    require(k >= 0 && k < num_steps_, "control problem: expected a step in [0, {}), got {}",
+            num_steps_, k);
+    require(x.allFinite(), "control problem: expected a finite state");
+    return PathFunction(this, x, k);
+  }
+
+  /// The noise-free forward-Euler path from (x, t_k): a start point for the minimiser.
+  Eigen::VectorXd drift_path(const Vec<D>& x, int k) const {
+    const int n = num_steps_ - k;
+    Eigen::VectorXd y(n * D);
+    Vec<D> cur = x;
+    for (int i = 1; i <= n; ++i) {
+      cur = cur + model_.drift(cur, time(k + i - 1)) * spec_.dt;
+      y.template segment<D>((i - 1) * D) = cur;
+    }
+    return y;
+  }
+
+  /// -log of the path-integral normaliser (2 pi dt)^{N/2} (det Sigma)^{n/2}, N = n D.
+  double log_normalizer(int n) const {
+    return 0.5 * n * D * (kLog2Pi + std::log(spec_.dt)) + 0.5 * n * log_det_sigma_;
+  }
+
+  /// Lower Cholesky factor of Sigma (forward-Euler increments are sqrt(dt) Sigma^{1/2} w).
+  const Mat<D>& sigma_sqrt() const { return sigma_sqrt_; }
+
+ private:
+  Model model_;
+  ControlSpec<D, P> spec_;
+  std::vector<HardWall<D>> walls_;
+  std::vector<int> wall_steps_;
+  double gamma_ = 0.0;
+  Mat<D> sigma_, sigma_inv_, sigma_sqrt_;
+  Eigen::LLT<Mat<D>> sigma_llt_;
+  double log_det_sigma_ = 0.0;
+  int num_steps_ = 0;
+};
+
+}  // namespace implicit::control
