@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numeric>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -20,6 +21,7 @@
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/evaluate.hpp"
 #include "implicit/slam/slam_filter.hpp"
+#include "vehicle.hpp"
 
 namespace implicit::app {
 namespace {
@@ -136,6 +138,8 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   }
   if (s.gate_chi2 > 0.0) base.gate_chi2 = s.gate_chi2;
   if (s.new_landmark_density > 0.0) base.new_landmark_density = s.new_landmark_density;
+  const MotionNoise noise{s.control_sd, s.state_sd};
+  base.motion = ute_params(robot::RobotLog{}, noise, base.motion);
   if (consistent) {
     const double f = std::sqrt(s.consistent_noise_scale);
     base.motion.control_std *= f;
@@ -145,9 +149,22 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   // Data.
   std::vector<slam::SlamDataset> logs;
   slam::SlamScenario scenario;
+  std::string model = "ute";
   if (!s.data_dir.empty()) {
     logs = load_logs(s.data_dir);
+    for (std::size_t k = 0; k < logs.size(); ++k) {
+      const std::string& declared = logs[k].vehicle_model;
+      const std::string m = resolve_model(
+          "slam", s.model, declared.empty() ? std::nullopt : std::optional(declared), logs[k].name);
+      require(k == 0 || m == model, "slam --data: expected logs of one vehicle, got '{}' and '{}'",
+              model, m);
+      model = m;
+    }
   } else {
+    require(s.model.empty() || s.model == "ute",
+            "slam --model {}: the synthetic data are the Car Park's Ute; give a log of that "
+            "vehicle with --data (implicit simulate --model {} writes one)",
+            s.model, s.model);
     scenario = slam::load_carpark_scenario(slam::default_data_dir());
     if (s.dense_landmarks > 0)
       scenario = slam::make_dense_scenario(scenario, s.dense_laps, s.dense_landmarks, ctx.seed);
@@ -178,6 +195,11 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
         opt.motion.encoder_offset = data[i].vehicle.encoder_offset;
         opt.motion.laser_forward = data[i].vehicle.laser_forward;
         opt.motion.laser_left = data[i].vehicle.laser_left;
+        if (model == "unicycle") {
+          robot::UnicycleParams p;
+          p.dt = data[i].vehicle.dt;
+          opt.model = robot::UnicycleModel(unicycle_params(robot::RobotLog{}, noise, p));
+        }
         runs[i] = slam::run_filter(data[i], opt);
         metrics[i] = slam::evaluate(data[i], runs[i]);
         bar.tick();
@@ -218,6 +240,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["truth"] = logs.empty() ? s.truth : "log";
   j["data"] =
       logs.empty() ? (s.dense_landmarks > 0 ? scenario.name : "carpark-synthetic") : data[0].name;
+  j["model"] = model;
   j["laser_every"] = s.laser_every;
   // The filter's model, so that a run on real data can be repeated from its JSON alone.
   j["control_noise"] = s.control_noise;

@@ -41,6 +41,10 @@ std::filesystem::path resolve_data_file(const std::filesystem::path& path);
 /// opened. Used by every reader of robot/ (CSV tables, the robot log).
 std::string read_text_file(const std::filesystem::path& path);
 
+/// Writes `text` to `path`, gzip-compressed when the name ends in ".gz". Throws InvalidArgument
+/// naming the file when it cannot be written completely.
+void write_text_file(const std::filesystem::path& path, const std::string& text);
+
 /// Reads a CSV whose header must equal `expected_header` exactly (gzip accepted, see
 /// read_text_file).
 NumericTable read_numeric_csv(const std::filesystem::path& path,
