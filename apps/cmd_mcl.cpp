@@ -61,6 +61,25 @@ void setup_mcl(CLI::App& sub) {
                  "Particles of the reference run")
       ->check(in_range(1, 10000000))
       ->capture_default_str();
+  sub.add_option("--model", cmd->settings.model,
+                 "The robot: ute or unicycle; default: the vehicle the log declares (ute when it "
+                 "declares none). A log declaring another vehicle is refused (exit 1)")
+      ->check(CLI::IsMember({"ute", "unicycle"}));
+  sub.add_option("--control-sd", cmd->settings.control_sd,
+                 "Motion noise: sd of u1 u2 (ute: speed [m/s], steering [rad], overrides --p; "
+                 "unicycle: v [m/s], omega [rad/s], default 0.1 0.05)")
+      ->expected(2)
+      ->check(in_range(0.0, 100.0));
+  sub.add_option("--state-sd", cmd->settings.state_sd,
+                 "Motion noise: sd of x [m], y [m], heading [rad] per sqrt(s), overrides --q")
+      ->expected(3)
+      ->check(in_range(1e-9, 100.0));
+  sub.add_option("--range-sd", cmd->settings.range_sd,
+                 "Sensor range noise sd [m] (0: Table 7's Sigma2 read per --sigma2)")
+      ->check(in_range(0.0, 100.0));
+  sub.add_option("--bearing-sd", cmd->settings.bearing_sd_deg,
+                 "Sensor bearing noise sd [deg] (0: Table 7's Sigma2 read per --sigma2)")
+      ->check(in_range(0.0, 90.0));
   sub.add_flag("--no-clutter{false}", cmd->settings.clutter,
                "Dropped detections contribute nothing (instead of the clutter density p0)");
   sub.add_flag("--allow-empty", cmd->allow_empty,
@@ -68,6 +87,7 @@ void setup_mcl(CLI::App& sub) {
                "non-finite metric); a warning is printed either way");
   add_common_options(sub, cmd->ctx);
   set_examples(sub, {"implicit mcl --method implicit --particles 100 --runs 20 --json",
+                     "implicit mcl --model unicycle --data u.log.gz --method implicit -M 100",
                      "implicit mcl --method standard --particles 300 --config B --out out/mcl"});
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);

@@ -78,9 +78,23 @@ void setup_slam(CLI::App& sub) {
   sub.add_flag("--allow-empty", cmd->allow_empty,
                "Exit 0 even when the run scored nothing (no step with truth, no landmark, a "
                "non-finite metric); a warning is printed either way");
+  sub.add_option("--model", s.model,
+                 "The robot: ute or unicycle; default: the vehicle the log declares (ute when it "
+                 "declares none). A log declaring another vehicle is refused (exit 1)")
+      ->check(CLI::IsMember({"ute", "unicycle"}));
+  sub.add_option("--control-sd", s.control_sd,
+                 "Motion noise: sd of u1 u2 (ute: speed [m/s], steering [rad], overrides "
+                 "--control-noise; unicycle: v [m/s], omega [rad/s], default 0.1 0.05)")
+      ->expected(2)
+      ->check(in_range(0.0, 100.0));
+  sub.add_option("--state-sd", s.state_sd,
+                 "Motion noise: sd of x [m], y [m], heading [rad] per sqrt(s)")
+      ->expected(3)
+      ->check(in_range(1e-9, 100.0));
   add_common_options(sub, cmd->ctx);
   set_examples(sub, {"implicit slam --method implicit-rb --particles 100 --datasets 10 --json",
                      "implicit slam --method ekf --datasets 50 --out out/slam",
+                     "implicit slam --model unicycle --data u.log.gz --method implicit-rb -M 100",
                      "implicit slam --method fastslam2 --association ml --data "
                      "data/victoria_park/victoria_park.log.gz --datasets 1 --json"});
   sub.callback([cmd] {

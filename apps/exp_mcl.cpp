@@ -8,10 +8,12 @@
 #include <filesystem>
 #include <fstream>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "experiments.hpp"
 #include "implicit/core/error.hpp"
@@ -20,6 +22,7 @@
 #include "implicit/robot/carpark.hpp"
 #include "implicit/robot/csv_table.hpp"
 #include "parallel_runs.hpp"
+#include "vehicle.hpp"
 
 namespace implicit::app {
 namespace {
@@ -146,6 +149,32 @@ void write_trajectory(const std::filesystem::path& file, const LocalizationProbl
   output.commit();
 }
 
+/// What run_mcl decided before the runs: the log, its name, and the JSON keys of the models.
+struct MclSetup {
+  robot::RobotLog log;
+  std::string model_name;
+  double p = 0.0;  ///< the Ute's control std (both entries), for the "p" key
+  std::chrono::steady_clock::time_point start;
+};
+
+robot::RangeBearingSensor mcl_sensor(const MclSettings& s) {
+  const double sr = 0.05, sb = 0.05 * kPi / 180.0;  // Table 7's Sigma2 entries
+  robot::RangeBearingSensor sensor = s.sigma2 == "variance"
+                                         ? robot::RangeBearingSensor(sr, sb)
+                                         : robot::RangeBearingSensor::from_std(sr, sb);
+  if (s.range_sd > 0 || s.bearing_sd_deg > 0) {
+    const Mat<2>& n = sensor.noise_covariance();
+    sensor = robot::RangeBearingSensor(
+        s.range_sd > 0 ? s.range_sd * s.range_sd : n(0, 0),
+        s.bearing_sd_deg > 0 ? std::pow(s.bearing_sd_deg * kPi / 180.0, 2) : n(1, 1));
+  }
+  return sensor;
+}
+
+template <typename Motion>
+nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const Motion& model,
+                             const robot::RangeBearingSensor& sensor, const MclSetup& setup);
+
 }  // namespace
 
 nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
@@ -159,26 +188,47 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
           "mcl --sigma2: expected 'variance' or 'std', got '{}'", s.sigma2);
   require(s.particles >= 1, "mcl --particles: expected >= 1, got {}", s.particles);
   require(s.runs >= 1, "mcl --runs: expected >= 1, got {}", s.runs);
-  const auto t_start = std::chrono::steady_clock::now();
-
-  // Models (spec §3.1, §3.2, §3.9): config A is the paper's P = 0.5, config B P = 0.1.
-  robot::UteParams params;
-  const double p = s.p >= 0 ? s.p : (s.config == "A" ? 0.5 : 0.1);
-  params.control_std = Vec<2>(p, p);
-  if (s.q >= 0) params.state_std.head<2>() = Vec<2>(s.q, s.q);
-  const robot::UteModel model(params);
-  const double sr = 0.05, sb = 0.05 * kPi / 180.0;  // Table 7's Sigma2 entries
-  const robot::RangeBearingSensor sensor = s.sigma2 == "variance"
-                                               ? robot::RangeBearingSensor(sr, sb)
-                                               : robot::RangeBearingSensor::from_std(sr, sb);
-
   require(s.truth == "gps" || s.truth == "reference",
           "mcl --truth: expected 'gps' or 'reference', got '{}'", s.truth);
   require(s.gps_std > 0 && std::isfinite(s.gps_std), "mcl --gps-std: expected > 0, got {}",
           s.gps_std);
   require(s.reference_particles >= 1, "mcl --reference-particles: expected >= 1, got {}",
           s.reference_particles);
-  const robot::RobotLog log = load_log(s.data_dir, model);
+  MclSetup setup;
+  setup.start = std::chrono::steady_clock::now();
+  setup.log = load_log(s.data_dir, robot::UteModel());  // Car Park folders: the Ute's geometry
+  setup.model_name =
+      resolve_model("mcl", s.model,
+                    setup.log.vehicle ? std::optional(setup.log.vehicle->model) : std::nullopt,
+                    s.data_dir.empty() ? "data/carpark" : s.data_dir);
+  const MotionNoise noise{s.control_sd, s.state_sd};
+  const robot::RangeBearingSensor sensor = mcl_sensor(s);
+  if (setup.model_name == "unicycle") {
+    require(s.truth == "gps",
+            "mcl --truth reference: the GPS-aided reference run is the Car Park's (--model ute), "
+            "got --model unicycle");
+    return run_mcl_model(s, ctx, robot::UnicycleModel(unicycle_params(setup.log, noise)), sensor,
+                         setup);
+  }
+  // Models (spec §3.1, §3.2, §3.9): config A is the paper's P = 0.5, config B P = 0.1.
+  robot::UteParams params;
+  setup.p = s.p >= 0 ? s.p : (s.config == "A" ? 0.5 : 0.1);
+  params.control_std = Vec<2>(setup.p, setup.p);
+  if (s.q >= 0) params.state_std.head<2>() = Vec<2>(s.q, s.q);
+  params = ute_params(setup.log, noise, params);
+  setup.p = params.control_std(0);
+  return run_mcl_model(s, ctx, robot::UteModel(params), sensor, setup);
+}
+
+namespace {
+
+/// The runs of run_mcl for one motion model, and the JSON result.
+template <typename Motion>
+nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const Motion& model,
+                             const robot::RangeBearingSensor& sensor, const MclSetup& setup) {
+  const robot::RobotLog& log = setup.log;
+  const auto t_start = setup.start;
+  const double p = setup.p;
   LocalizationProblem problem = filter::make_problem(log, model.dt());
   std::string reference_cache;
   bool reference_from_cache = false;
@@ -228,9 +278,11 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   };
   const std::string settings = fmt::format(
       "seed={} method={} M={} config={} p={:a} q={:a} map={} clutter={} sigma2={} truth={} "
-      "gps_std={:a} reference_M={} data={}",
-      ctx.seed, s.method, s.particles, s.config, p, params.state_std(0), s.map, s.clutter, s.sigma2,
-      s.truth, s.gps_std, s.reference_particles, s.data_dir);
+      "gps_std={:a} reference_M={} data={} model={} control_sd={:a} state_sd={:a} range_sd={:a} "
+      "bearing_sd={:a}",
+      ctx.seed, s.method, s.particles, s.config, p, s.q, s.map, s.clutter, s.sigma2, s.truth,
+      s.gps_std, s.reference_particles, s.data_dir, setup.model_name, fmt::join(s.control_sd, ","),
+      fmt::join(s.state_sd, ","), s.range_sd, s.bearing_sd_deg);
   const auto records =
       distribute_runs(ctx, "mcl", settings, static_cast<std::size_t>(s.runs), [&](std::size_t r) {
         const LocalizationRun run = run_number(r);
@@ -289,7 +341,8 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   // Dead reckoning from the prior mean: the error with no laser at all.
   std::vector<Pose> dr;
   Pose x = problem.initial_mean;
-  for (const auto& st : problem.schedule.steps) dr.push_back(x = model.predict(x, st.u));
+  for (std::size_t n = 0; n < problem.schedule.steps.size(); ++n)
+    dr.push_back(x = model.with_dt(problem.step_dt[n]).predict(x, problem.schedule.steps[n].u));
 
   // The beacon extraction and the sensor model against the survey: every detection placed in the
   // world with the ground-truth pose, and its distance to the nearest surveyed beacon (spec §3.8).
@@ -313,8 +366,12 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   j["particles"] = s.particles;
   j["runs"] = s.runs;
   j["config"] = s.config;
+  j["model"] = setup.model_name;
   j["p"] = p;
-  j["q"] = params.state_std(0);
+  j["q"] = model.params().state_std(0);
+  j["control_sd"] = {model.params().control_std(0), model.params().control_std(1)};
+  j["state_sd"] = {model.params().state_std(0), model.params().state_std(1),
+                   model.params().state_std(2)};
   j["sigma2"] = s.sigma2;
   j["clutter"] = s.clutter;
   j["seed"] = ctx.seed;
@@ -412,4 +469,5 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   return j;
 }
 
+}  // namespace
 }  // namespace implicit::app

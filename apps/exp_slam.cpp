@@ -12,8 +12,10 @@
 #include <fstream>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "experiments.hpp"
 #include "implicit/core/error.hpp"
@@ -22,6 +24,7 @@
 #include "implicit/slam/evaluate.hpp"
 #include "implicit/slam/slam_filter.hpp"
 #include "parallel_runs.hpp"
+#include "vehicle.hpp"
 
 namespace implicit::app {
 namespace {
@@ -227,6 +230,8 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   }
   if (s.gate_chi2 > 0.0) base.gate_chi2 = s.gate_chi2;
   if (s.new_landmark_density > 0.0) base.new_landmark_density = s.new_landmark_density;
+  const MotionNoise noise{s.control_sd, s.state_sd};
+  base.motion = ute_params(robot::RobotLog{}, noise, base.motion);
   if (consistent) {
     const double f = std::sqrt(s.consistent_noise_scale);
     base.motion.control_std *= f;
@@ -236,9 +241,22 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   // Data.
   std::vector<slam::SlamDataset> logs;
   slam::SlamScenario scenario;
+  std::string model = "ute";
   if (!s.data_dir.empty()) {
     logs = load_logs(s.data_dir);
+    for (std::size_t k = 0; k < logs.size(); ++k) {
+      const std::string& declared = logs[k].vehicle_model;
+      const std::string m = resolve_model(
+          "slam", s.model, declared.empty() ? std::nullopt : std::optional(declared), logs[k].name);
+      require(k == 0 || m == model, "slam --data: expected logs of one vehicle, got '{}' and '{}'",
+              model, m);
+      model = m;
+    }
   } else {
+    require(s.model.empty() || s.model == "ute",
+            "slam --model {}: the synthetic data are the Car Park's Ute; give a log of that "
+            "vehicle with --data (implicit simulate --model {} writes one)",
+            s.model, s.model);
     scenario = slam::load_carpark_scenario(slam::default_data_dir());
     if (s.dense_landmarks > 0)
       scenario = slam::make_dense_scenario(scenario, s.dense_laps, s.dense_landmarks, ctx.seed);
@@ -251,10 +269,11 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   const std::string settings = fmt::format(
       "seed={} method={} M={} association={} truth={} laser_every={} noise_scale={:a} "
       "dense={}x{} min_range={:a} control_noise={:a} range_sd={:a} bearing_sd={:a} gate={:a} "
-      "p0={:a} data={}",
+      "p0={:a} data={} model={} control_sd={:a} state_sd={:a}",
       ctx.seed, s.method, particles, s.association, s.truth, s.laser_every,
       s.consistent_noise_scale, s.dense_landmarks, s.dense_laps, s.min_range, s.control_noise,
-      s.range_sd, s.bearing_sd_deg, s.gate_chi2, s.new_landmark_density, s.data_dir);
+      s.range_sd, s.bearing_sd_deg, s.gate_chi2, s.new_landmark_density, s.data_dir, model,
+      fmt::join(s.control_sd, ","), fmt::join(s.state_sd, ","));
   auto dataset = [&](std::size_t i) {
     if (!logs.empty()) return logs[i % logs.size()];
     slam::SyntheticConfig cfg;
@@ -272,6 +291,11 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     opt.motion.encoder_offset = data.vehicle.encoder_offset;
     opt.motion.laser_forward = data.vehicle.laser_forward;
     opt.motion.laser_left = data.vehicle.laser_left;
+    if (model == "unicycle") {
+      robot::UnicycleParams p;
+      p.dt = data.vehicle.dt;
+      opt.model = robot::UnicycleModel(unicycle_params(robot::RobotLog{}, noise, p));
+    }
     const slam::SlamRun run = slam::run_filter(data, opt);
     RunRecord r = to_record(data, run, slam::evaluate(data, run), consistent, i == 0);
     bar.tick();
@@ -315,6 +339,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["truth"] = logs.empty() ? s.truth : "log";
   j["data"] =
       logs.empty() ? (s.dense_landmarks > 0 ? scenario.name : "carpark-synthetic") : data0.name;
+  j["model"] = model;
   j["laser_every"] = s.laser_every;
   // The filter's model, so that a run on real data can be repeated from its JSON alone.
   j["control_noise"] = s.control_noise;

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -52,6 +53,11 @@ struct MclSettings {
   std::string truth = "gps";        ///< ground truth: "gps" or "reference" (GPS-aided MCL run)
   double gps_std = 0.5;             ///< [m] GPS std assumed by the reference run
   int reference_particles = 5000;   ///< particles of the reference run
+  std::string model;                ///< "ute" | "unicycle"; empty: what the log declares
+  std::vector<double> control_sd;   ///< motion noise sd of u1, u2 (overrides p); empty: default
+  std::vector<double> state_sd;     ///< motion noise sd of x, y, heading; empty: default
+  double range_sd = 0.0;            ///< sensor range sd [m]; 0: Table 7 per --sigma2
+  double bearing_sd_deg = 0.0;      ///< sensor bearing sd [deg]; 0: Table 7 per --sigma2
 };
 /// Keys: method, particles, runs, config, error_percent_mean/std/median, rmse_m,
 /// heading_rmse_rad, ess_mean, cpu_ms_per_step, detections_used, detections_dropped, lost_runs,
@@ -78,6 +84,9 @@ struct SlamSettings {
   double bearing_sd_deg = 0.0;        ///< sd of the bearing noise [deg]
   double gate_chi2 = 0.0;             ///< ML gate on d^2
   double new_landmark_density = 0.0;  ///< p0 [1/(m rad)]
+  std::string model;                  ///< "ute" | "unicycle"; empty: what the log declares
+  std::vector<double> control_sd;     ///< motion noise sd of u1, u2 (overrides control_noise)
+  std::vector<double> state_sd;       ///< motion noise sd of x, y, heading; empty: default
 };
 /// Keys: method, particles, datasets, error_percent_mean/std, error_aligned_percent_mean,
 /// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_pose_aligned_m, rmse_map_m, nees_mean

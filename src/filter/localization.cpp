@@ -19,12 +19,18 @@ LocalizationProblem make_problem(const robot::RobotLog& log, double dt) {
   p.schedule = robot::make_schedule(log, log.initial->time, 0.5 * dt);
   require(!p.schedule.steps.empty(), "localization: expected controls after the initial time {}",
           log.initial->time);
+  p.step_dt = robot::step_lengths(log, p.schedule, dt);
   p.detections.resize(p.schedule.steps.size());
   for (std::size_t n = 0; n < p.schedule.steps.size(); ++n) {
     const int scan = p.schedule.steps[n].scan;
     if (scan < 0) continue;
-    for (const robot::Observation& o : log.scans[static_cast<std::size_t>(scan)].observations) {
-      p.detections[n].push_back({o.z, o.landmark_id >= 0 ? p.map.index_of(o.landmark_id) : -1});
+    const robot::ObservationSet& set = log.scans[static_cast<std::size_t>(scan)];
+    for (const robot::Observation& o : set.observations) {
+      const int index = o.landmark_id >= 0 ? p.map.index_of(o.landmark_id) : -1;
+      require(o.landmark_id < 0 || index >= 0,
+              "localization: the scan at t = {} names landmark id {}, which the map does not have",
+              set.time, o.landmark_id);
+      p.detections[n].push_back({o.z, index});
       ++p.detections_total;
     }
   }

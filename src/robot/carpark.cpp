@@ -129,6 +129,7 @@ std::vector<Measurement> extract_beacon_detections(std::span<const double> range
 RobotLog carpark_to_log(const CarParkData& data, const UteModel& model,
                         const CarParkOptions& options) {
   RobotLog log;
+  log.vehicle = declare_vehicle(model.params());
   log.landmarks = data.beacons;
   log.initial = PosePrior{options.start_time, options.initial_pose, options.initial_std};
   for (std::size_t k = 0; k < data.control_time.size(); ++k) {

@@ -67,6 +67,31 @@ class LineParser {
   }
   std::size_t line() const { return line_; }
 
+  /// 'vehicle MODEL key=value ...': the model name, then numeric parameters with unique keys.
+  VehicleDeclaration vehicle() const {
+    if (fields() < 1)
+      fail("record 'vehicle': expected 'vehicle MODEL [key=value ...]', got no model");
+    VehicleDeclaration v;
+    v.model = tokens_[1];
+    if (v.model.find('=') != std::string::npos)
+      fail(fmt::format("field 'model': expected a model name (ute, unicycle), got '{}'", v.model));
+    for (std::size_t k = 2; k < tokens_.size(); ++k) {
+      const std::string& t = tokens_[k];
+      const std::size_t eq = t.find('=');
+      if (eq == std::string::npos || eq == 0)
+        fail(fmt::format("field {}: expected key=value, got '{}'", k, t));
+      const std::string key = t.substr(0, eq), text = t.substr(eq + 1);
+      char* end = nullptr;
+      const double value = std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(value))
+        fail(fmt::format("field '{}': expected a finite number, got '{}'", key, text));
+      if (v.parameter(key))
+        fail(fmt::format("field '{}': expected each key once, got it a second time", key));
+      v.parameters.emplace_back(key, value);
+    }
+    return v;
+  }
+
  private:
   const std::string& name_;
   std::size_t line_;
@@ -80,6 +105,55 @@ void require_later(const LineParser& p, double previous, double t, bool has_prev
 }
 
 }  // namespace
+
+VehicleDeclaration declare_vehicle(const UteParams& p) {
+  return {"ute",
+          {{"dt", p.dt},
+           {"L", p.wheelbase},
+           {"H", p.encoder_offset},
+           {"a", p.laser_forward},
+           {"b", p.laser_left}}};
+}
+
+VehicleDeclaration declare_vehicle(const UnicycleParams& p) { return {"unicycle", {{"dt", p.dt}}}; }
+
+namespace {
+
+/// Copies the declared parameters into the named fields; an unknown key is an error.
+void read_parameters(const VehicleDeclaration& v,
+                     std::initializer_list<std::pair<const char*, double*>> fields) {
+  for (const auto& [key, value] : v.parameters) {
+    bool known = false;
+    for (const auto& [name, target] : fields)
+      if (key == name) {
+        *target = value;
+        known = true;
+      }
+    if (known) continue;
+    std::string names;
+    for (const auto& f : fields) names += (names.empty() ? "" : ", ") + std::string(f.first);
+    throw InvalidArgument(
+        fmt::format("vehicle '{}': expected parameters among {}, got '{}'", v.model, names, key));
+  }
+}
+
+}  // namespace
+
+UteParams ute_params(const VehicleDeclaration& v, UteParams p) {
+  read_parameters(v, {{"dt", &p.dt},
+                      {"L", &p.wheelbase},
+                      {"H", &p.encoder_offset},
+                      {"a", &p.laser_forward},
+                      {"b", &p.laser_left}});
+  p.validate();
+  return p;
+}
+
+UnicycleParams unicycle_params(const VehicleDeclaration& v, UnicycleParams p) {
+  read_parameters(v, {{"dt", &p.dt}});
+  p.validate();
+  return p;
+}
 
 RobotLog parse_robot_log(std::istream& in, const std::string& name) {
   RobotLog log;
@@ -100,7 +174,10 @@ RobotLog parse_robot_log(std::istream& in, const std::string& name) {
     if (obs_remaining > 0 && kind != "obs")
       p.fail(fmt::format("expected {} more 'obs' line(s) of the scan at t = {}, got '{}'",
                          obs_remaining, log.scans.back().time, printable(kind)));
-    if (kind == "landmark") {
+    if (kind == "vehicle") {
+      if (log.vehicle) p.fail("expected one 'vehicle' record, got a second one");
+      log.vehicle = p.vehicle();
+    } else if (kind == "landmark") {
       p.expect_fields(3, 3, "'landmark id x y'");
       const int id = p.integer(1, "id");
       if (log.landmarks.index_of(id) >= 0)
@@ -155,8 +232,9 @@ RobotLog parse_robot_log(std::istream& in, const std::string& name) {
       if (p.fields() == 4) r.heading = p.number(4, "heading");
       log.truth.push_back(r);
     } else {
-      p.fail(fmt::format("expected a record kind landmark|initial|control|scan|obs|truth, got '{}'",
-                         printable(kind)));
+      p.fail(fmt::format(
+          "expected a record kind vehicle|landmark|initial|control|scan|obs|truth, got '{}'",
+          printable(kind)));
     }
   }
   if (obs_remaining > 0)
@@ -179,6 +257,12 @@ RobotLog read_robot_log(const std::filesystem::path& path) {
 
 void write_robot_log(std::ostream& out, const RobotLog& log) {
   out << "# implicit robot log v1 (docs/formats.md)\n";
+  if (log.vehicle) {
+    out << "vehicle " << log.vehicle->model;
+    for (const auto& [key, value] : log.vehicle->parameters)
+      out << fmt::format(" {}={:.17g}", key, value);
+    out << "\n";
+  }
   for (std::size_t k = 0; k < log.landmarks.size(); ++k) {
     const Landmark& m = log.landmarks.position(k);
     out << fmt::format("landmark {} {:.17g} {:.17g}\n", log.landmarks.id(k), m(0), m(1));
@@ -209,9 +293,9 @@ void write_robot_log(std::ostream& out, const RobotLog& log) {
 }
 
 void write_robot_log(const std::filesystem::path& path, const RobotLog& log) {
-  std::ofstream out(path);
-  require(static_cast<bool>(out), "robot log: expected a writable file, got '{}'", path.string());
+  std::ostringstream out;
   write_robot_log(out, log);
+  write_text_file(path, out.str());  // gzip when the name ends in .gz
 }
 
 StepSchedule make_schedule(const RobotLog& log, double start_time, double max_offset) {
@@ -267,6 +351,25 @@ void require_runnable(const RobotLog& log) {
         log.controls.empty() ? std::string("none in the file")
                              : fmt::format("{} all earlier (the last at {})", log.controls.size(),
                                            log.controls.back().time)));
+}
+
+std::vector<double> step_lengths(const RobotLog& log, const StepSchedule& schedule,
+                                 double nominal_dt) {
+  std::vector<double> lengths;
+  if (schedule.steps.empty()) return lengths;
+  lengths.reserve(schedule.steps.size());
+  double previous = log.initial ? log.initial->time : schedule.steps.front().time;
+  const auto first =
+      std::lower_bound(log.controls.begin(), log.controls.end(), schedule.steps.front().time,
+                       [](const TimedControl& c, double t) { return c.time < t; });
+  if (first != log.controls.begin()) previous = (first - 1)->time;
+  for (const FilterStep& step : schedule.steps) {
+    double length = step.time - previous;
+    if (std::abs(length - nominal_dt) <= 1e-9 || length <= 0.0) length = nominal_dt;
+    lengths.push_back(length);
+    previous = step.time;
+  }
+  return lengths;
 }
 
 TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule, double max_gap) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <fstream>
 #include <string>
 
 #include <fmt/format.h>
@@ -54,6 +55,26 @@ std::string read_text_file(const std::filesystem::path& requested, std::size_t m
         name, line, text.size(), message.empty() ? fmt::format("code {}", closed) : message));
   }
   return text;
+}
+
+void write_text_file(const std::filesystem::path& path, const std::string& text) {
+  const std::string name = path.string();
+  if (path.extension() == ".gz") {
+    gzFile f = gzopen(name.c_str(), "wb9");
+    require(f != nullptr, "expected a writable file, got '{}'", name);
+    const int wrote =
+        text.empty() ? 0 : gzwrite(f, text.data(), static_cast<unsigned>(text.size()));
+    const int closed = gzclose(f);
+    require(wrote == static_cast<int>(text.size()) && closed == Z_OK,
+            "expected to write {} bytes to '{}', the gzip stream failed", text.size(), name);
+    return;
+  }
+  std::ofstream out(path, std::ios::binary);
+  require(static_cast<bool>(out), "expected a writable file, got '{}'", name);
+  out << text;
+  out.flush();
+  require(static_cast<bool>(out), "expected to write {} bytes to '{}', the write failed",
+          text.size(), name);
 }
 
 }  // namespace implicit::robot

@@ -130,6 +130,13 @@ void SlamDataset::validate() const {
   require(truth.empty() || truth.size() == controls.size() + 1,
           "SLAM data set '{}': expected {} truth rows, got {}", name, controls.size() + 1,
           truth.size());
+  require(step_dt.empty() || step_dt.size() == controls.size(),
+          "SLAM data set '{}': expected {} step lengths, got {}", name, controls.size(),
+          step_dt.size());
+  for (std::size_t n = 0; n < step_dt.size(); ++n)
+    require(step_dt[n] > 0 && std::isfinite(step_dt[n]),
+            "SLAM data set '{}', step {}: expected a positive step length, got {}", name, n + 1,
+            step_dt[n]);
 }
 
 std::vector<Pose> integrate_controls(const robot::UteModel& model, const Pose& x0,
@@ -404,15 +411,24 @@ SlamDataset dataset_from_robot_log(const robot::RobotLog& log, const robot::UteP
   // Known ids become indices 0..K-1 in the order of the landmark records.
   for (std::size_t k = 0; k < log.landmarks.size(); ++k)
     d.landmarks.push_back(log.landmarks.position(k));
+  if (log.vehicle) d.vehicle_model = log.vehicle->model;
   const auto schedule = robot::make_schedule(log, log.initial->time, 0.5 * vehicle.dt);
+  d.step_dt = robot::step_lengths(log, schedule, vehicle.dt);
+  // Regular data keep the nominal step (and the Ute model itself, bit for bit).
+  if (std::all_of(d.step_dt.begin(), d.step_dt.end(), [&](double t) { return t == vehicle.dt; }))
+    d.step_dt.clear();
   SlamDatasetBuilder b(d);
   for (const auto& st : schedule.steps) {
     b.begin_step(st.u);
     if (st.scan < 0) continue;
-    for (const auto& o : log.scans[static_cast<std::size_t>(st.scan)].observations) {
+    const auto& scan = log.scans[static_cast<std::size_t>(st.scan)];
+    for (const auto& o : scan.observations) {
       Observation obs;
       obs.z = o.z;
       obs.landmark = o.landmark_id >= 0 ? log.landmarks.index_of(o.landmark_id) : -1;
+      require(o.landmark_id < 0 || obs.landmark >= 0,
+              "log '{}': the scan at t = {} names landmark id {}, which the map does not have",
+              name, scan.time, o.landmark_id);
       b.add_observation(obs);
     }
   }
@@ -433,9 +449,15 @@ SlamDataset dataset_from_robot_log(const robot::RobotLog& log, const robot::UteP
   return d;
 }
 
+SlamDataset dataset_from_robot_log(const robot::RobotLog& log, double dt, const std::string& name) {
+  robot::UteParams vehicle;
+  vehicle.dt = dt;
+  vehicle.validate();
+  return dataset_from_robot_log(log, vehicle, name);
+}
+
 SlamDataset read_slam_log(const std::filesystem::path& path) {
   const auto lines = read_text_lines(path);
-  const robot::UteParams vehicle = vehicle_from_comments(lines, path);
   std::string text;
   for (const auto& l : lines) {
     text += l;
@@ -443,6 +465,16 @@ SlamDataset read_slam_log(const std::filesystem::path& path) {
   }
   std::istringstream in(text);
   const robot::RobotLog log = robot::parse_robot_log(in, path.string());
+  robot::UteParams vehicle;
+  if (!log.vehicle) {
+    vehicle = vehicle_from_comments(lines, path);  // the older convention
+  } else if (log.vehicle->model == "ute") {
+    vehicle = robot::ute_params(*log.vehicle);
+  } else if (const auto dt = log.vehicle->parameter("dt")) {
+    // Another robot: the data set needs only its nominal step (the filter brings the model).
+    vehicle.dt = *dt;
+    vehicle.validate();
+  }
   std::string name = path.filename().string();
   for (const char* ext : {".gz", ".txt", ".log"})
     if (name.size() > std::strlen(ext) && name.ends_with(ext))
@@ -454,10 +486,15 @@ void write_slam_log(const SlamDataset& d, const std::filesystem::path& path) {
   robot::RobotLog log;
   for (std::size_t k = 0; k < d.landmarks.size(); ++k)
     log.landmarks.add(static_cast<int>(k), d.landmarks[k]);
-  const double dt = d.vehicle.dt;
+  if (d.vehicle_model.empty() || d.vehicle_model == "ute") {
+    log.vehicle = robot::declare_vehicle(d.vehicle);
+  } else {
+    log.vehicle = robot::VehicleDeclaration{d.vehicle_model, {{"dt", d.vehicle.dt}}};
+  }
   log.initial = robot::PosePrior{0.0, d.initial_pose, Vec<3>::Zero()};
+  double t = 0.0;
   for (std::size_t n = 1; n <= d.steps(); ++n) {
-    const double t = dt * static_cast<double>(n);
+    t = d.step_dt.empty() ? d.vehicle.dt * static_cast<double>(n) : t + d.step_dt[n - 1];
     log.controls.push_back({t, d.control(n)});
     const auto obs = d.observations(n);
     if (!obs.empty()) {
@@ -474,22 +511,7 @@ void write_slam_log(const SlamDataset& d, const std::filesystem::path& path) {
       log.truth.push_back(r);
     }
   }
-  std::ostringstream out;
-  out << fmt::format("# vehicle dt={} L={} H={} a={} b={}\n", d.vehicle.dt, d.vehicle.wheelbase,
-                     d.vehicle.encoder_offset, d.vehicle.laser_forward, d.vehicle.laser_left);
-  robot::write_robot_log(out, log);
-  const std::string text = out.str();
-  if (path.extension() == ".gz") {
-    gzFile f = gzopen(path.string().c_str(), "wb9");
-    require(f != nullptr, "{}: expected a writable path", path.string());
-    const int wrote = gzwrite(f, text.data(), static_cast<unsigned>(text.size()));
-    gzclose(f);
-    require(wrote == static_cast<int>(text.size()), "{}: write failed", path.string());
-  } else {
-    std::ofstream os(path);
-    require(static_cast<bool>(os), "{}: expected a writable path", path.string());
-    os << text;
-  }
+  robot::write_robot_log(path, log);  // gzip when the name ends in .gz
 }
 
 }  // namespace implicit::slam

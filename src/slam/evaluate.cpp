@@ -51,6 +51,7 @@ SlamRun run_filter(const SlamDataset& data, const SlamOptions& options, bool kno
   run.path_cov.push_back(Mat<3>::Zero());
   const auto t0 = std::chrono::steady_clock::now();
   for (std::size_t n = 1; n <= data.steps(); ++n) {
+    if (!data.step_dt.empty()) filter->set_step_length(data.step_dt[n - 1]);
     filter->step(n, data.control(n), data.observations(n));
     const PoseEstimate e = filter->pose();
     run.path.push_back(e.mean);

@@ -97,6 +97,18 @@ Mat23 inverse_jacobian_pose(const Pose& x, const Measurement& z) {
   return g;
 }
 
+/// The filter's motion model: options.model, else the Ute with options.motion.
+robot::AnyMotionModel motion_model(const SlamOptions& o) {
+  if (o.model) return *o.model;
+  return robot::UteModel(o.motion);
+}
+
+/// The model for a step of length dt (the nominal one itself when dt is nominal).
+robot::AnyMotionModel step_model(const robot::AnyMotionModel& base, double dt) {
+  require(dt > 0 && std::isfinite(dt), "SLAM: expected a positive step length, got {}", dt);
+  return dt == base.dt() ? base : base.with_dt(dt);
+}
+
 double log_normal2(const Vec<2>& e, const Eigen::LLT<Mat<2>>& llt) {
   const Mat<2> l = llt.matrixL();
   return -kLog2Pi - std::log(l(0, 0)) - std::log(l(1, 1)) - 0.5 * e.dot(llt.solve(e));
@@ -106,7 +118,9 @@ double log_normal2(const Vec<2>& e, const Eigen::LLT<Mat<2>>& llt) {
 class EkfSlamFilter final : public SlamFilter {
  public:
   EkfSlamFilter(const SlamOptions& opt, const Pose& x0)
-      : opt_(opt), model_(opt.motion), core_(x0, Mat<3>::Zero()) {}
+      : opt_(opt), base_(motion_model(opt)), model_(base_), core_(x0, Mat<3>::Zero()) {}
+
+  void set_step_length(double dt) override { model_ = step_model(base_, dt); }
 
   void set_known_map(std::span<const Landmark> landmarks) override {
     require(core_.landmark_count() == 0 && stats_.steps == 0,
@@ -193,7 +207,8 @@ class EkfSlamFilter final : public SlamFilter {
 
  private:
   SlamOptions opt_;
-  robot::UteModel model_;
+  robot::AnyMotionModel base_;   ///< the model at its nominal step
+  robot::AnyMotionModel model_;  ///< the model for the current step length
   EkfSlamCore core_;
   std::vector<int> slot_of_id_, id_of_slot_;
   SlamStats stats_;
@@ -229,7 +244,10 @@ constexpr std::size_t kIndexedAssociationMinLandmarks = 1024;
 class ParticleSlamFilter final : public SlamFilter {
  public:
   ParticleSlamFilter(const SlamOptions& opt, const Pose& x0)
-      : opt_(opt), model_(opt.motion), m_(static_cast<std::size_t>(opt.particles)) {
+      : opt_(opt),
+        base_(motion_model(opt)),
+        model_(base_),
+        m_(static_cast<std::size_t>(opt.particles)) {
     particles_.resize(m_);
     for (auto& p : particles_) p.x = x0;
     next_.resize(m_);
@@ -238,6 +256,8 @@ class ParticleSlamFilter final : public SlamFilter {
     outcome_.resize(m_);
     estimate_.mean = x0;
   }
+
+  void set_step_length(double dt) override { model_ = step_model(base_, dt); }
 
   void set_known_map(std::span<const Landmark> landmarks) override {
     require(stats_.steps == 0 && particles_[0].map.empty(),
@@ -572,7 +592,8 @@ class ParticleSlamFilter final : public SlamFilter {
   }
 
   SlamOptions opt_;
-  robot::UteModel model_;
+  robot::AnyMotionModel base_;   ///< the model at its nominal step
+  robot::AnyMotionModel model_;  ///< the model for the current step length
   std::size_t m_;
   std::vector<Particle> particles_, next_;
   std::vector<double> log_w_, w_;

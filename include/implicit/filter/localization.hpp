@@ -26,6 +26,10 @@ struct LocalizationProblem {
   Pose initial_mean = Pose::Zero();
   Mat3 initial_covariance = Mat3::Identity();
   robot::StepSchedule schedule;
+  /// Per step: its length [s], the time since the previous control (the first step: since the
+  /// control before it, else since the initial time). Within 1e-9 s of the model's dt it is that
+  /// dt exactly (time stamps are printed with finite precision).
+  std::vector<double> step_dt;
   std::vector<std::vector<LabelledMeasurement>> detections;  ///< per step (empty: predict only)
   robot::TruthTrack truth;
   int detections_total = 0;
@@ -35,7 +39,8 @@ struct LocalizationProblem {
 };
 
 /// Builds the problem from a log with an `initial` record; scans are attached to the nearest step
-/// within dt / 2. Throws InvalidArgument when the log has no initial pose, no controls or no map.
+/// within dt / 2 (dt: the model's nominal step). Throws InvalidArgument when the log has no
+/// initial pose, no controls or no map, or when a detection names a landmark id not in the map.
 LocalizationProblem make_problem(const robot::RobotLog& log, double dt);
 
 struct LocalizationRun {
@@ -70,6 +75,7 @@ LocalizationRun run_localization(const LocalizationProblem& problem, const Motio
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = process_cpu_seconds();
   for (std::size_t n = 0; n < problem.schedule.steps.size(); ++n) {
+    if (!problem.step_dt.empty()) pf.set_step_length(problem.step_dt[n]);
     run.steps.push_back(pf.step(problem.schedule.steps[n].u, problem.detections[n]));
     run.resamplings += run.steps.back().resampled ? 1 : 0;
   }
@@ -99,6 +105,7 @@ robot::TruthTrack reference_track(const LocalizationProblem& problem, const Moti
   track.position.reserve(problem.schedule.steps.size());
   track.heading.reserve(problem.schedule.steps.size());
   for (std::size_t n = 0; n < problem.schedule.steps.size(); ++n) {
+    if (!problem.step_dt.empty()) pf.set_step_length(problem.step_dt[n]);
     const Vec<2>& fix = problem.position_fixes[n];
     const StepSummary& s = fix.allFinite()
                                ? pf.step(problem.schedule.steps[n].u, problem.detections[n],

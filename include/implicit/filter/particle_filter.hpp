@@ -40,7 +40,7 @@
 #include "implicit/core/weights.hpp"
 #include "implicit/filter/proposals.hpp"
 #include "implicit/robot/landmark_map.hpp"
-#include "implicit/robot/log_format.hpp"
+#include "implicit/robot/models.hpp"
 
 namespace implicit::filter {
 
@@ -83,6 +83,7 @@ class ParticleFilter {
   ParticleFilter(Motion motion, Sensor sensor, robot::LandmarkMap map, Proposal proposal,
                  FilterOptions options)
       : motion_(std::move(motion)),
+        step_motion_(motion_),
         sensor_(std::move(sensor)),
         map_(std::move(map)),
         proposal_(std::move(proposal)),
@@ -100,7 +101,7 @@ class ParticleFilter {
             "particle filter: expected a symmetric positive definite sensor covariance, got "
             "[[{}, {}], [{}, {}]]",
             noise(0, 0), noise(0, 1), noise(1, 0), noise(1, 1));
-    context_.motion = &motion_;
+    context_.motion = &step_motion_;
     context_.sensor = &sensor_;
     context_.map = std::span<const Landmark>(map_.positions());
     context_.noise_information = llt.solve(Mat2::Identity());
@@ -154,6 +155,21 @@ class ParticleFilter {
     summarize();
   }
 
+  /// The length of the following steps [s] (the data's own time stamps; until called, the
+  /// model's dt()). A model without with_dt() accepts only its own dt (within 1e-9 s).
+  void set_step_length(double dt) {
+    require(dt > 0 && std::isfinite(dt), "particle filter: expected a positive step length, got {}",
+            dt);
+    if constexpr (robot::VariableStepMotionModel<Motion>) {
+      step_motion_ = motion_.with_dt(dt);
+    } else {
+      require(std::abs(dt - motion_.dt()) <= 1e-9,
+              "particle filter: expected steps of the motion model's fixed length {} s (it has "
+              "no with_dt()), got a step of {} s",
+              motion_.dt(), dt);
+    }
+  }
+
   /// One motion step with control u and the detections seen after it (empty: predict only).
   const StepSummary& step(const Control& u, std::span<const LabelledMeasurement> z = {}) {
     return step_impl(u, z, nullptr);
@@ -168,20 +184,6 @@ class ParticleFilter {
             fix.position(0), fix.position(1), fix.std);
     return step_impl(u, z, &fix);
   }
-  /// Convenience: a step with the observations of a robot log (ids mapped to map indices).
-  const StepSummary& step(const Control& u, std::span<const robot::Observation> observations,
-                          std::vector<LabelledMeasurement>& buffer) {
-    buffer.clear();
-    for (const robot::Observation& o : observations) {
-      const int k = o.landmark_id >= 0 ? map_.index_of(o.landmark_id) : -1;
-      require(o.landmark_id < 0 || k >= 0,
-              "particle filter: expected a landmark id of the map, got unknown id {}",
-              o.landmark_id);
-      buffer.push_back({o.z, k});
-    }
-    return step(u, std::span<const LabelledMeasurement>(buffer));
-  }
-
  private:
   const StepSummary& step_impl(const Control& u, std::span<const LabelledMeasurement> z,
                                const PositionFix* fix) {
@@ -194,7 +196,7 @@ class ParticleFilter {
               "({}, {}) for landmark {}",
               map_.size(), lz.z(0), lz.z(1), lz.landmark);
     ++step_;
-    context_.motion = &motion_;  // refreshed: the filter may have been moved since construction
+    context_.motion = &step_motion_;  // refreshed: the filter may have been moved since then
     context_.sensor = &sensor_;
     context_.map = std::span<const Landmark>(map_.positions());
     context_.u = u;
@@ -297,6 +299,7 @@ class ParticleFilter {
   }
 
   Motion motion_;
+  Motion step_motion_;  ///< motion_ for the current step length
   Sensor sensor_;
   robot::LandmarkMap map_;
   Proposal proposal_;

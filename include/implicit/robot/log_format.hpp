@@ -5,6 +5,7 @@
 // lengths in metres, angles in radians. Full description: docs/formats.md, "Plain-text log format".
 //
 //   # implicit robot log v1
+//   vehicle ute dt=0.025 L=2.83 H=0.76 a=3.78 b=0.5   # the robot the controls drive (optional)
 //   landmark 1 2.8953 -4.0353                 # id east north (known map / ground-truth map)
 //   initial 45.047 4.734 4.138 4.098 0.1 0.1 0.02   # t x y heading, then std devs of the prior
 //   control 45.049 2.0435 0.2764              # t u1 u2: the motion model's control for the
@@ -26,11 +27,13 @@
 #include <iosfwd>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "implicit/core/types.hpp"
 #include "implicit/robot/landmark_map.hpp"
 #include "implicit/robot/range_bearing.hpp"
+#include "implicit/robot/unicycle_model.hpp"
 #include "implicit/robot/ute_model.hpp"
 
 namespace implicit::robot {
@@ -63,7 +66,29 @@ struct PosePrior {
   std::size_t line = 0;  ///< line of the 'initial' record in its file (0: not read from one)
 };
 
+/// The `vehicle` record: which motion model the controls are for, and its geometry.
+struct VehicleDeclaration {
+  std::string model;  ///< e.g. "ute" (u = axle speed, steering) or "unicycle" (u = v, omega)
+  std::vector<std::pair<std::string, double>> parameters;  ///< key=value, in file order
+
+  /// The value of `key`, if declared.
+  std::optional<double> parameter(const std::string& key) const {
+    for (const auto& [k, v] : parameters)
+      if (k == key) return v;
+    return std::nullopt;
+  }
+};
+
+/// The declarations of the shipped models: "ute" (dt, L, H, a, b) and "unicycle" (dt).
+VehicleDeclaration declare_vehicle(const UteParams& p);
+VehicleDeclaration declare_vehicle(const UnicycleParams& p);
+/// `base` with the declared parameters (keys as declare_vehicle writes them); a key the model
+/// does not have is an InvalidArgument naming it and the keys it has.
+UteParams ute_params(const VehicleDeclaration& v, UteParams base = {});
+UnicycleParams unicycle_params(const VehicleDeclaration& v, UnicycleParams base = {});
+
 struct RobotLog {
+  std::optional<VehicleDeclaration> vehicle;  ///< absent in logs that do not declare one
   LandmarkMap landmarks;
   std::optional<PosePrior> initial;
   std::vector<TimedControl> controls;
@@ -76,6 +101,7 @@ struct RobotLog {
 RobotLog parse_robot_log(std::istream& in, const std::string& name);
 RobotLog read_robot_log(const std::filesystem::path& path);
 void write_robot_log(std::ostream& out, const RobotLog& log);
+/// Writes the log to a file, gzip-compressed when the name ends in ".gz".
 void write_robot_log(const std::filesystem::path& path, const RobotLog& log);
 
 // ---- From a log to filter steps ------------------------------------------------------------
@@ -103,6 +129,12 @@ StepSchedule make_schedule(const RobotLog& log, double start_time, double max_of
 /// What every run on a log needs: an 'initial' record and at least one control at or after its
 /// time (a run with no step would score nothing). Throws ParseError naming the source and line.
 void require_runnable(const RobotLog& log);
+/// The length of each step [s]: from the previous control's time (the first step: the control
+/// before it in the log, else the initial time) to its own. Lengths within 1e-9 s of
+/// `nominal_dt` are exactly nominal_dt (time stamps are printed with finite precision), and a
+/// first step with nothing before it gets nominal_dt.
+std::vector<double> step_lengths(const RobotLog& log, const StepSchedule& schedule,
+                                 double nominal_dt);
 
 /// Ground truth at each step time, interpolated linearly between truth records; NaN outside
 /// their time range and inside gaps longer than max_gap seconds (a straight line across a GPS

@@ -4,10 +4,13 @@
 // The particle filter (implicit/filter/particle_filter.hpp) is written against these concepts only,
 // so a user localizes their own robot (a unicycle, a differential drive, ...) by writing two small
 // classes; the filter, the proposals (bootstrap, implicit) and the data association stay untouched.
-// UteModel and RangeBearingSensor are the library's models of the paper's vehicle and laser.
+// UteModel and RangeBearingSensor are the library's models of the paper's vehicle and laser;
+// UnicycleModel (a differential drive) and MountedRangeBearingSensor (any mounting offset and
+// bearing convention) are ready-made alternatives.
 //
-//   struct Unicycle {                       // state (x, y, heading), control (v, omega)
-//     double dt() const { return 0.1; }
+//   struct MyRobot {                        // state (x, y, heading), control (v, omega)
+//     double dt() const { return 0.1; }     // the nominal step length
+//     MyRobot with_dt(double dt) const;     // optional: a step of another length
 //     Pose predict(const Pose& x, const Control& u) const;      // mean of the next state
 //     Mat3 process_covariance(const Pose& x, const Control& u) const;  // SPD covariance
 //   };
@@ -20,7 +23,9 @@
 #include <concepts>
 
 #include "implicit/core/types.hpp"
+#include "implicit/robot/mounted_sensor.hpp"
 #include "implicit/robot/range_bearing.hpp"
+#include "implicit/robot/unicycle_model.hpp"
 #include "implicit/robot/ute_model.hpp"
 
 namespace implicit::robot {
@@ -31,6 +36,14 @@ concept MotionModel = requires(const M& m, const Pose& x, const Control& u) {
   { m.predict(x, u) } -> std::convertible_to<Pose>;
   { m.process_covariance(x, u) } -> std::convertible_to<Mat3>;
   { m.dt() } -> std::convertible_to<double>;
+};
+
+/// A motion model whose step length can change from step to step: with_dt(dt) is the model for
+/// a step of length dt. The filters use it to step on the data's own time stamps; a model
+/// without it can only run on data spaced by its dt().
+template <typename M>
+concept VariableStepMotionModel = MotionModel<M> && requires(const M& m, double dt) {
+  { m.with_dt(dt) } -> std::convertible_to<M>;
 };
 
 /// A sensor measuring a 2-vector z = h(x, m) + v, v ~ N(0, noise_covariance()), of a point landmark
@@ -80,6 +93,10 @@ concept LandmarkSensorWithFusedJacobian = LandmarkSensor<S> &&
 };
 
 static_assert(MotionModel<UteModel>);
+static_assert(VariableStepMotionModel<UteModel>);
+static_assert(VariableStepMotionModel<UnicycleModel>);
+static_assert(LandmarkSensorWithHessian<MountedRangeBearingSensor>);
+static_assert(LandmarkSensorWithFusedJacobian<MountedRangeBearingSensor>);
 static_assert(MotionModelWithCovariance<UteModel>);
 static_assert(LandmarkSensorWithFusedJacobian<RangeBearingSensor>);
 static_assert(RangeFirstSensor<RangeBearingSensor>);

@@ -31,6 +31,20 @@ using Measurement = Vec<2>;  ///< (range [m], bearing [rad])
 using Mat2 = Mat<2>;
 using Mat23 = Eigen::Matrix<double, 2, 3>;
 
+/// The one range-bearing Jacobian of the library. For a sensor at s(x) seeing the landmark at
+/// offset d = m - s, with q = d s / d heading (zero for a sensor at the state's position):
+///   h = (|d|, atan2(d2, d1)),   the heading term of the bearing (- heading + convention) is
+///   the caller's, and J_h_x is
+///   [[ -d1 / r, -d2 / r, -(d . q) / r ], [ d2 / r^2, -d1 / r^2, (d2 q1 - d1 q2) / r^2 - 1 ]].
+inline void range_bearing_with_jacobian(double d1, double d2, double q1, double q2, Measurement& h,
+                                        Mat23& j) {
+  const double r2 = d1 * d1 + d2 * d2, r = std::sqrt(r2);
+  h(0) = r;
+  h(1) = std::atan2(d2, d1);
+  j << -d1 / r, -d2 / r, -(d1 * q1 + d2 * q2) / r, d2 / r2, -d1 / r2,
+      (d2 * q1 - d1 * q2) / r2 - 1.0;
+}
+
 class RangeBearingSensor {
  public:
   static constexpr int MeasurementDim = 2;
@@ -69,21 +83,18 @@ class RangeBearingSensor {
 
   /// J_h_x (2x3).
   Mat23 jacobian_pose(const Pose& x, const Landmark& m) const {
-    const double dx = x(0) - m(0), dy = x(1) - m(1);
-    const double r2 = dx * dx + dy * dy, r = std::sqrt(r2);
+    Measurement h;
     Mat23 j;
-    j << dx / r, dy / r, 0.0, -dy / r2, dx / r2, -1.0;
+    predict_with_jacobian(x, m, h, j);
     return j;
   }
 
   /// predict() and jacobian_pose() in one pass (one square root, one atan2 instead of a hypot, an
   /// atan2 and a square root): the per-particle filter updates call this in their inner loops.
   void predict_with_jacobian(const Pose& x, const Landmark& m, Measurement& h, Mat23& j) const {
-    const double dx = x(0) - m(0), dy = x(1) - m(1);
-    const double r2 = dx * dx + dy * dy, r = std::sqrt(r2);
-    h(0) = r;
-    h(1) = std::atan2(-dy, -dx) - x(2) + kPi / 2.0;
-    j << dx / r, dy / r, 0.0, -dy / r2, dx / r2, -1.0;
+    // The sensor is at the state: it does not move with the heading (q = 0).
+    range_bearing_with_jacobian(m(0) - x(0), m(1) - x(1), 0.0, 0.0, h, j);
+    h(1) = h(1) - x(2) + kPi / 2.0;  // the order of the other predictions: same bits
   }
 
   /// Second derivatives of h with respect to the pose (spec §3.3), with dx = x - m1, dy = y - m2:

@@ -59,6 +59,13 @@ class UteModel {
   const UteParams& params() const { return p_; }
   double dt() const { return p_.dt; }
 
+  /// The same vehicle over a step of length dt (the filters step on the log's own time stamps).
+  UteModel with_dt(double dt) const {
+    UteParams p = p_;
+    p.dt = dt;
+    return UteModel(p);
+  }
+
   /// Axle-centre speed from the rear-left encoder speed: vc = ve / (1 - tan(alpha) H / L).
   double axle_speed(double encoder_speed, double alpha) const {
     return encoder_speed / (1.0 - std::tan(alpha) * p_.encoder_offset / p_.wheelbase);

@@ -39,6 +39,8 @@ struct Observation {
 struct SlamDataset {
   std::string name;
   robot::UteParams vehicle;               ///< geometry and dt (noise settings belong to the filter)
+  std::string vehicle_model;              ///< the model a log declares ("ute", ...); "" if none
+  std::vector<double> step_dt;            ///< step_dt[n-1] = length of step n [s]; empty: dt
   Pose initial_pose = Pose::Zero();       ///< known initial pose (row 0)
   std::vector<Control> controls;          ///< controls[n-1] = u_n, n = 1..N
   std::vector<Observation> detections;    ///< all detections, step by step
@@ -57,6 +59,7 @@ struct SlamDataset {
     return !truth.empty() && (truth_valid.empty() || truth_valid[n] != 0);
   }
   std::size_t observation_count() const { return detections.size(); }
+  double step_length(std::size_t n) const { return step_dt.empty() ? vehicle.dt : step_dt[n - 1]; }
 
   /// Checks sizes, finiteness and ranges; throws InvalidArgument naming the step and field.
   void validate() const;
@@ -143,12 +146,18 @@ std::vector<Pose> read_reference_trace(const std::filesystem::path& path);
 /// interpolated to the step times, landmark ids become indices in record order.
 SlamDataset dataset_from_robot_log(const robot::RobotLog& log, const robot::UteParams& vehicle,
                                    const std::string& name);
+/// The same for any robot: only its nominal step dt [s] is needed here (the filter brings the
+/// motion model, SlamOptions::model).
+SlamDataset dataset_from_robot_log(const robot::RobotLog& log, double dt, const std::string& name);
 
-/// Reads a robot log (plain or gzip). The vehicle geometry comes from an optional comment line
-/// "# vehicle dt=0.025 L=2.83 H=0.76 a=0.95 b=0.5" (Car Park values when absent).
+/// Reads a robot log (plain or gzip). The vehicle comes from its `vehicle` record (docs/formats.md;
+/// for another model than the Ute, `vehicle.dt` holds its declared dt); logs without one may carry
+/// the older comment line
+/// "# vehicle dt=0.025 L=2.83 H=0.76 a=0.95 b=0.5" (Car Park values when absent too).
 SlamDataset read_slam_log(const std::filesystem::path& path);
 
-/// Writes a data set as a robot log (step n at time n dt; gzip when the name ends in .gz).
+/// Writes a data set as a robot log with its `vehicle` record (steps at the times step_dt gives,
+/// else step n at time n dt; gzip when the name ends in .gz).
 void write_slam_log(const SlamDataset& d, const std::filesystem::path& path);
 
 /// All lines of a text file, transparently gunzipped when it is gzip-compressed. Throws

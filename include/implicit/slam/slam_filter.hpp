@@ -7,6 +7,7 @@
 //   opt.particles = 100;
 //   auto filter = slam::make_slam_filter(opt, data.initial_pose);
 //   for (std::size_t n = 1; n <= data.steps(); ++n) {
+//     filter->set_step_length(data.step_length(n));   // the data's own time stamps
 //     filter->step(n, data.control(n), data.observations(n));
 //     slam::PoseEstimate est = filter->pose();
 //   }
@@ -34,10 +35,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string_view>
 #include <vector>
 
+#include "implicit/robot/any_motion_model.hpp"
 #include "implicit/robot/range_bearing.hpp"
 #include "implicit/robot/ute_model.hpp"
 #include "implicit/slam/dataset.hpp"
@@ -58,11 +61,14 @@ Association parse_association(std::string_view name);
 struct SlamOptions {
   SlamMethod method = SlamMethod::kImplicitRb;
   Association association = Association::kKnown;
-  int particles = 100;               ///< M (ignored by EKF-SLAM)
-  std::uint64_t seed = 1;            ///< filter randomness: Rng({seed, step, particle, purpose})
-  robot::UteParams motion;           ///< the filter's motion model (Sigma1 from P, Q)
-  robot::RangeBearingSensor sensor;  ///< Sigma2
-  double gate_chi2 = 9.21;           ///< chi^2_2 99 % gate of the ML association
+  int particles = 100;      ///< M (ignored by EKF-SLAM)
+  std::uint64_t seed = 1;   ///< filter randomness: Rng({seed, step, particle, purpose})
+  robot::UteParams motion;  ///< the Ute's parameters (Sigma1 from P, Q), unless `model`
+  /// The filter's motion model when it is not the Ute (any LinearizableMotionModel, e.g.
+  /// robot::UnicycleModel or your own); empty: robot::UteModel(motion).
+  std::optional<robot::AnyMotionModel> model;
+  robot::RangeBearingSensor sensor;                  ///< Sigma2
+  double gate_chi2 = 9.21;                           ///< chi^2_2 99 % gate of the ML association
   double new_landmark_density = 1.0 / (15.0 * kPi);  ///< p0 [1/(m rad)], spec §3.10
   double resample_threshold = 0.5;  ///< resample (systematic) when ESS < threshold * M
   double min_range = 0.0;  ///< detections closer than this are ignored (counted as skipped)
@@ -110,6 +116,9 @@ class SlamFilter {
   virtual void step(std::uint64_t n, const Control& u, std::span<const Observation> obs) = 0;
   /// Starts with a known map (landmark ids = indices; covariance zero): for tests that reduce
   /// SLAM to localisation. Must be called before the first step.
+  /// The length [s] of the following steps (the data's own time stamps); until called, the
+  /// motion model's dt().
+  virtual void set_step_length(double dt) = 0;
   virtual void set_known_map(std::span<const Landmark> landmarks) = 0;
   virtual PoseEstimate pose() const = 0;
   virtual MapEstimate map() const = 0;

@@ -1,0 +1,112 @@
+// `implicit simulate`: a synthetic robot log (truth, surveyed landmarks, controls at irregular
+// times, detections with landmark ids) for any shipped robot, read back by `mcl` and `slam`.
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "context.hpp"
+#include "implicit/robot/simulate.hpp"
+#include "registry.hpp"
+#include "vehicle.hpp"
+
+namespace implicit::app {
+namespace {
+
+struct SimulateCommand {
+  std::string model = "unicycle";
+  RunContext ctx;  ///< --seed, and --out: here the log FILE
+  robot::SimulationOptions options;
+  MotionNoise noise;
+  double range_sd = 0.0, bearing_sd_deg = 0.0;  ///< 0: the spec's Sigma2
+};
+
+template <typename Motion>
+robot::RobotLog simulate(const SimulateCommand& c, const Motion& motion, double speed,
+                         bool unicycle) {
+  const robot::RangeBearingSensor sensor =
+      c.range_sd > 0 || c.bearing_sd_deg > 0
+          ? robot::RangeBearingSensor::from_std(c.range_sd > 0 ? c.range_sd : std::sqrt(0.05),
+                                                c.bearing_sd_deg > 0
+                                                    ? c.bearing_sd_deg * kPi / 180.0
+                                                    : std::sqrt(0.05 * kPi / 180.0))
+          : robot::RangeBearingSensor();
+  return robot::simulate_robot_log(
+      motion, sensor, robot::square_route_driver(speed, c.options.route_side, unicycle), c.options,
+      c.ctx.seed);
+}
+
+void setup_simulate(CLI::App& sub) {
+  auto cmd = std::make_shared<SimulateCommand>();
+  auto& c = *cmd;
+  sub.add_option("--model", c.model, "The robot: ute (the paper's car) or unicycle")
+      ->check(CLI::IsMember({"ute", "unicycle"}))
+      ->capture_default_str();
+  add_common_options(sub, c.ctx);
+  sub.get_option("--out")->description("The log FILE to write (gzip when it ends in .gz)");
+  sub.get_option("--out")->required();
+  sub.add_option("--steps", c.options.steps, "Motion steps")
+      ->check(in_range(1, 10000000))
+      ->capture_default_str();
+  sub.add_option("--landmarks", c.options.landmarks, "Surveyed landmarks")
+      ->check(in_range(1, 100000))
+      ->capture_default_str();
+  sub.add_option("--scan-every", c.options.scan_every, "A scan at every k-th control")
+      ->check(in_range(1, 100000))
+      ->capture_default_str();
+  sub.add_option("--control-sd", c.noise.control_sd,
+                 "Motion noise: sd of u1 and u2 (ute: speed [m/s], steering [rad]; unicycle: v "
+                 "[m/s], omega [rad/s]); default: the model's")
+      ->expected(2)
+      ->check(in_range(0.0, 100.0));
+  sub.add_option("--state-sd", c.noise.state_sd,
+                 "Motion noise: sd of x [m], y [m], heading [rad] per sqrt(s); default: the "
+                 "model's")
+      ->expected(3)
+      ->check(in_range(1e-9, 100.0));
+  sub.add_option("--range-sd", c.range_sd, "Sensor range noise sd [m] (0: spec Sigma2, 0.224 m)")
+      ->check(in_range(0.0, 100.0));
+  sub.add_option("--bearing-sd", c.bearing_sd_deg,
+                 "Sensor bearing noise sd [deg] (0: spec Sigma2, 1.69 deg)")
+      ->check(in_range(0.0, 90.0));
+  set_examples(sub, {"implicit simulate --model unicycle --seed 3 --out u.log.gz",
+                     "implicit mcl --model unicycle --data u.log.gz --method implicit -M 100"});
+  sub.callback([cmd] {
+    const SimulateCommand& c = *cmd;
+    const robot::RobotLog none;  // no declaration: the parameters come from the flags alone
+    robot::RobotLog log;
+    if (c.model == "unicycle") {
+      const robot::UnicycleParams p = unicycle_params(none, c.noise);
+      log = simulate(c, robot::UnicycleModel(p), 1.0, true);
+      log.vehicle = robot::declare_vehicle(p);
+    } else {
+      const robot::UteParams p = ute_params(none, c.noise);
+      log = simulate(c, robot::UteModel(p), 3.0, false);
+      log.vehicle = robot::declare_vehicle(p);
+    }
+    const std::string out = c.ctx.out_dir.string();
+    robot::write_robot_log(out, log);
+    std::size_t detections = 0;
+    for (const auto& s : log.scans) detections += s.observations.size();
+    nlohmann::json j{{"file", out},
+                     {"model", c.model},
+                     {"seed", c.ctx.seed},
+                     {"steps", log.controls.size()},
+                     {"seconds_simulated", log.controls.back().time},
+                     {"landmarks", log.landmarks.size()},
+                     {"scans", log.scans.size()},
+                     {"detections", detections}};
+    if (c.ctx.json) {
+      fmt::print("{}\n", j.dump(2));
+      return;
+    }
+    fmt::print("{}: {} model, {} steps over {:.1f} s, {} landmarks, {} scans with {} detections\n",
+               out, c.model, log.controls.size(), log.controls.back().time, log.landmarks.size(),
+               log.scans.size(), detections);
+  });
+}
+
+const Registrar reg{"simulate", "A synthetic robot log (ute or unicycle) for mcl and slam",
+                    setup_simulate};
+
+}  // namespace
+}  // namespace implicit::app

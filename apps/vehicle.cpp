@@ -1,0 +1,63 @@
+#include "vehicle.hpp"
+
+#include <fmt/format.h>
+
+#include "implicit/core/error.hpp"
+
+namespace implicit::app {
+namespace {
+
+/// What the two controls of each model mean, for the mismatch message.
+const char* controls_of(const std::string& model) {
+  if (model == "ute") return "u1 = axle speed [m/s], u2 = steering angle [rad]";
+  if (model == "unicycle") return "u1 = v [m/s], u2 = omega [rad/s]";
+  return "unknown to this program";
+}
+
+/// The noise flags applied to a model's parameters (both models have the same two fields).
+template <typename Params>
+Params with_noise(Params p, const MotionNoise& noise) {
+  if (!noise.control_sd.empty()) {
+    require(noise.control_sd.size() == 2, "--control-sd: expected 2 values (u1 u2), got {}",
+            noise.control_sd.size());
+    p.control_std = Vec<2>(noise.control_sd[0], noise.control_sd[1]);
+  }
+  if (!noise.state_sd.empty()) {
+    require(noise.state_sd.size() == 3, "--state-sd: expected 3 values (x y heading), got {}",
+            noise.state_sd.size());
+    p.state_std = Vec<3>(noise.state_sd[0], noise.state_sd[1], noise.state_sd[2]);
+  }
+  p.validate();
+  return p;
+}
+
+}  // namespace
+
+std::string resolve_model(const std::string& command, const std::string& flag,
+                          const std::optional<std::string>& declared,
+                          const std::string& data_name) {
+  require(flag.empty() || flag == "ute" || flag == "unicycle",
+          "{} --model: expected 'ute' or 'unicycle', got '{}'", command, flag);
+  if (!declared) return flag.empty() ? "ute" : flag;
+  require(*declared == "ute" || *declared == "unicycle",
+          "{}: the log '{}' declares vehicle '{}'; this program runs 'ute' or 'unicycle'", command,
+          data_name, *declared);
+  require(flag.empty() || flag == *declared,
+          "{} --model {}: the log '{}' declares vehicle '{}' (controls: {}), not '{}' (controls: "
+          "{}); run with --model {}",
+          command, flag, data_name, *declared, controls_of(*declared), flag, controls_of(flag),
+          *declared);
+  return *declared;
+}
+
+robot::UteParams ute_params(const robot::RobotLog& log, const MotionNoise& noise,
+                            robot::UteParams p) {
+  return with_noise(log.vehicle ? robot::ute_params(*log.vehicle, p) : p, noise);
+}
+
+robot::UnicycleParams unicycle_params(const robot::RobotLog& log, const MotionNoise& noise,
+                                      robot::UnicycleParams p) {
+  return with_noise(log.vehicle ? robot::unicycle_params(*log.vehicle, p) : p, noise);
+}
+
+}  // namespace implicit::app

@@ -1,0 +1,51 @@
+// `implicit simulate` writes a log for any shipped robot; `mcl` (and `slam`) read it back with the
+// matching --model and refuse the other one with exit code 1 and the reason.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+#include "apps/cli_runner.hpp"
+
+namespace implicit::test {
+namespace {
+
+TEST(AnyRobotCli, SimulatedUnicycleLogRunsWithItsModelAndIsRefusedByTheOther) {
+  TempDir dir("any_robot");
+  const std::string log = (dir.path() / "u.log.gz").string();
+  const auto sim = run_cli("simulate --model unicycle --seed 3 --steps 600 --out '" + log + "'");
+  ASSERT_EQ(sim.code, 0) << sim.err;
+
+  const auto mcl =
+      run_cli("mcl --model unicycle --data '" + log + "' --method implicit -M 50 --runs 1 --json");
+  ASSERT_EQ(mcl.code, 0) << mcl.err;
+  const auto j = nlohmann::json::parse(mcl.out);
+  EXPECT_EQ(j["model"], "unicycle");
+  EXPECT_LT(j["rmse_m"].get<double>(), 0.5);  // see filter/any_robot_test.cpp for the bound
+  EXPECT_GT(j["dead_reckoning_error_percent"].get<double>(), j["error_percent_mean"].get<double>());
+
+  // Without --model the log's declaration is used.
+  const auto implied = run_cli("mcl --data '" + log + "' -M 20 --runs 1 --json");
+  ASSERT_EQ(implied.code, 0) << implied.err;
+  EXPECT_EQ(nlohmann::json::parse(implied.out)["model"], "unicycle");
+
+  const auto wrong = run_cli("mcl --model ute --data '" + log + "'");
+  EXPECT_EQ(wrong.code, 1);
+  EXPECT_NE(wrong.err.find("declares vehicle 'unicycle'"), std::string::npos) << wrong.err;
+  EXPECT_NE(wrong.err.find("--model unicycle"), std::string::npos) << wrong.err;
+}
+
+TEST(AnyRobotCli, TheCarParkIsAUteAndRefusesTheUnicycle) {
+  const auto r = run_cli("mcl --model unicycle -M 10 --runs 1");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("declares vehicle 'ute'"), std::string::npos) << r.err;
+}
+
+TEST(AnyRobotCli, SimulateNeedsAnOutputFile) {
+  const auto r = run_cli("simulate --model unicycle");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace implicit::test
