@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libtbb-dev libcli11-dev nlohmann-json3-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev librandom123-dev pybind11-dev
   python3 python3-dev python3-numpy python3-matplotlib zlib1g-dev
+  pkgconf doxygen
 )
 
 missing=()
