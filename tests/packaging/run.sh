@@ -36,6 +36,10 @@ for f in include/implicit/core/implicit_sampler.hpp include/implicit/build_info.
          share/implicit/data/carpark/carpark_dr.csv share/implicit/plots/figure1.py; do
   [ -e "$prefix/$f" ] || fail "the install has no $f"
 done
+# Random123 sits in /usr/include on Debian, so a consumer would compile even if the package forgot
+# it: check that the exported target carries it.
+grep -q "implicit::Random123" "$prefix/lib/cmake/implicit/implicitTargets.cmake" ||
+  fail "the exported target implicit::implicit does not link implicit::Random123"
 # Nothing installed may point back into the source or build tree.
 if grep -rlI -e "$source_dir" -e "$build_dir" "$prefix/lib" "$prefix/include" 2>/dev/null; then
   fail "installed files above name the source or build folder"
