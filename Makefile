@@ -19,8 +19,8 @@ SANITIZE_EXCLUDE ?= slow|packaging
 # Each fuzz target runs this many seconds in `make fuzz-smoke`.
 FUZZ_SECONDS ?= 25
 
-.PHONY: all deps configure build test test-slow reproduce reproduce-quick bench format clean \
-	configure-sanitize test-sanitize fuzz-smoke
+.PHONY: all deps configure build test test-slow reproduce reproduce-quick bench docs install format \
+	clean configure-sanitize test-sanitize fuzz-smoke
 
 all: build
 
@@ -79,6 +79,16 @@ reproduce-quick: build
 
 bench: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS) --target benchmarks
+
+# The API reference: $(BUILD_DIR)/docs/html/index.html (Doxygen, from the public headers).
+docs: configure
+	@cmake --build $(BUILD_DIR) --target docs
+
+# Installs the library, headers, CMake and pkg-config files, the CLI, the Python module, the data
+# and the plot scripts under PREFIX (see README.md, "Install").
+PREFIX ?= /usr/local
+install: build
+	@cmake --install $(BUILD_DIR) --prefix $(PREFIX)
 
 format:
 	@find include src apps examples bench tests python -name '*.hpp' -o -name '*.cpp' | xargs clang-format -i

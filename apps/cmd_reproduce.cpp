@@ -26,6 +26,7 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
 #include "parallel_runs.hpp"
+#include "implicit/core/share_dir.hpp"
 #include "registry.hpp"
 #include "report.hpp"
 
@@ -328,9 +329,16 @@ struct FigureSpec {
 const std::vector<FigureSpec> kFigures = {{1, "slit"},       {2, "slit"}, {4, "arm"},
                                           {5, "himmelblau"}, {6, "mcl"},  {7, "slam"}};
 
-std::filesystem::path plots_dir() {
-  if (const char* env = std::getenv("IMPLICIT_PLOTS_DIR"); env && *env) return env;
-  return std::filesystem::path(IMPLICIT_SOURCE_DIR) / "python" / "plots";
+// The plot scripts: $IMPLICIT_PLOTS_DIR, else <prefix>/share/implicit/plots of the install (or the
+// build tree's link to python/plots). Empty, with the reason in `error`, when there are none: the
+// experiments' numbers still count, and each figure says why it is missing.
+std::filesystem::path plots_dir(std::string& error) {
+  try {
+    return find_share_dir("plots", "IMPLICIT_PLOTS_DIR");
+  } catch (const InvalidArgument& e) {
+    error = e.what();
+    return {};
+  }
 }
 
 json draw_figures(const json& results, const std::filesystem::path& dir, bool no_figures,
@@ -340,9 +348,11 @@ json draw_figures(const json& results, const std::filesystem::path& dir, bool no
   const std::string python = python_env && *python_env ? python_env : "/usr/bin/python3";
   setenv("MPLBACKEND", "Agg", 0);  // no display needed
   const auto logs = dir / "logs";
+  std::string no_scripts;
+  const auto scripts = no_figures ? std::filesystem::path() : plots_dir(no_scripts);
   for (const auto& f : kFigures) {
     const std::string key = fmt::format("figure{}", f.number);
-    const auto script = plots_dir() / (key + ".py");
+    const auto script = scripts / (key + ".py");
     json entry = {{"experiment", f.experiment}, {"script", script.string()}};
     std::string exp_status = "skipped";
     if (results.contains("experiments") && results["experiments"].contains(f.experiment))
@@ -353,6 +363,9 @@ json draw_figures(const json& results, const std::filesystem::path& dir, bool no
     } else if (exp_status == "failed") {
       entry["status"] = "failed";
       entry["error"] = fmt::format("experiment {} failed", f.experiment);
+    } else if (!no_scripts.empty()) {
+      entry["status"] = "failed";
+      entry["error"] = no_scripts;
     } else if (!std::filesystem::exists(script)) {
       entry["status"] = "failed";
       entry["error"] = fmt::format("plot script {} not found", script.string());

@@ -10,6 +10,7 @@ packages=(
   python3 python3-dev python3-numpy python3-matplotlib zlib1g-dev
   clang-14 libclang-rt-14-dev  # make test-sanitize, make fuzz-smoke: clang++ 14, ASan, UBSan, libFuzzer
   libopenmpi-dev openmpi-bin  # the MPI build (docs/cluster.md)
+  pkgconf doxygen
 )
 
 missing=()

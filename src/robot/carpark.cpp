@@ -8,11 +8,8 @@
 #include <fmt/format.h>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/share_dir.hpp"
 #include "implicit/robot/csv_table.hpp"
-
-#ifndef IMPLICIT_SOURCE_DIR
-#define IMPLICIT_SOURCE_DIR "."
-#endif
 
 namespace implicit::robot {
 namespace {
@@ -26,7 +23,7 @@ std::vector<std::string> beam_header(const char* first, const char* prefix, cons
 }  // namespace
 
 std::filesystem::path default_carpark_dir() {
-  return std::filesystem::path(IMPLICIT_SOURCE_DIR) / "data" / "carpark";
+  return find_share_dir("data", "IMPLICIT_DATA_DIR") / "carpark";
 }
 
 CarParkData load_carpark(const std::filesystem::path& dir) {

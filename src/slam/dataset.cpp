@@ -18,6 +18,7 @@
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/rng.hpp"
+#include "implicit/core/share_dir.hpp"
 #include "implicit/core/weights.hpp"
 #include "implicit/robot/csv_table.hpp"
 #include "implicit/robot/log_format.hpp"
@@ -235,15 +236,7 @@ SlamScenario make_dense_scenario(const SlamScenario& base, int laps, int landmar
   return s;
 }
 
-std::filesystem::path default_data_dir() {
-  if (const char* env = std::getenv("IMPLICIT_DATA_DIR"); env != nullptr && *env != '\0')
-    return env;
-#ifdef IMPLICIT_SOURCE_DIR
-  return std::filesystem::path(IMPLICIT_SOURCE_DIR) / "data";
-#else
-  return "data";
-#endif
-}
+std::filesystem::path default_data_dir() { return find_share_dir("data", "IMPLICIT_DATA_DIR"); }
 
 std::vector<std::string> read_text_lines(const std::filesystem::path& path) {
   // One reader for every text file (gzip, size bound, errors naming the file): robot's.

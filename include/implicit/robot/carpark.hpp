@@ -2,7 +2,7 @@
 // The ACFR University Car Park data set (paper §4.1, spec §3.8): reader, beacon extraction from
 // the raw laser scans, ground truth, and conversion to the plain-text robot log.
 //
-//   CarParkData data = load_carpark(default_carpark_dir());     // data/carpark of the source tree
+//   CarParkData data = load_carpark(default_carpark_dir());     // the bundled data/carpark
 //   RobotLog log = carpark_to_log(data, UteModel());            // controls, detections, GPS truth
 //   StepSchedule steps = make_schedule(log, log.initial->time, 0.5 * 0.025);
 //
@@ -46,7 +46,9 @@ struct CarParkData {
   LandmarkMap beacons;  ///< the 15 surveyed beacons, ids 1..15
 };
 
-/// The bundled copy: <source tree>/data/carpark.
+/// The bundled copy: the folder carpark/ of the data folder (see slam::default_data_dir; found
+/// through $IMPLICIT_DATA_DIR or the install layout, core/share_dir.hpp). Throws InvalidArgument
+/// naming the places looked when there is none.
 std::filesystem::path default_carpark_dir();
 
 /// Reads the five CSV files of data/carpark/README.md. Throws ParseError (file, line, field) for a

@@ -127,7 +127,10 @@ std::vector<Pose> integrate_controls(const robot::UteModel& model, const Pose& x
 SlamScenario make_dense_scenario(const SlamScenario& base, int laps, int landmarks,
                                  std::uint64_t seed);
 
-/// The project's data folder (data/ of the source tree, or $IMPLICIT_DATA_DIR when set).
+/// The bundled data folder: $IMPLICIT_DATA_DIR when set, else ../share/implicit/data next to the
+/// running executable (an install, or the build tree's link to data/ of the source tree;
+/// core/share_dir.hpp).
+/// Throws InvalidArgument naming the places looked when there is none.
 std::filesystem::path default_data_dir();
 
 /// Reads data/slam-synthetic/{carpark_controls.csv, landmarks.csv} into the Car Park scenario.

@@ -1,4 +1,5 @@
-// A downstream program: samples a 1-D Gaussian with the installed library.
+// A downstream program built with `pkg-config --cflags --libs implicit` against the installed
+// library: samples a 1-D Gaussian, whose log Z is known exactly.
 #include <implicit/core/implicit_sampler.hpp>
 
 #include <cmath>
