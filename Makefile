@@ -19,8 +19,8 @@ SANITIZE_EXCLUDE ?= slow|packaging
 # Each fuzz target runs this many seconds in `make fuzz-smoke`.
 FUZZ_SECONDS ?= 25
 
-.PHONY: all deps configure build test test-slow reproduce reproduce-quick bench docs install format \
-	clean configure-sanitize test-sanitize fuzz-smoke
+.PHONY: all deps configure build test test-slow reproduce reproduce-quick crosscheck bench docs \
+	install format clean configure-sanitize test-sanitize fuzz-smoke
 
 all: build
 
@@ -76,6 +76,20 @@ reproduce: build
 
 reproduce-quick: build
 	@$(BUILD_DIR)/apps/implicit reproduce --quick --out $(OUT)
+
+# The independent numpy implementations (python/crosscheck/) against the reference numbers the
+# report uses: they read them from a results.json of `implicit reproduce` (here a quick Himmelblau
+# run, which also carries Table 4's closed-form expectations). Sizes: docs/reproducing.md.
+CROSSCHECK_OUT ?= $(BUILD_DIR)/crosscheck
+crosscheck: build
+	@$(BUILD_DIR)/apps/implicit reproduce --quick --only himmelblau --no-figures \
+	  --out $(CROSSCHECK_OUT) > /dev/null
+	@echo "== double slit (Table 2), 500 runs per cell =="
+	@/usr/bin/python3 python/crosscheck/double_slit_numpy.py --runs 500 --samples 10,50,100 \
+	  --seed 1 --compare $(CROSSCHECK_OUT)/results.json
+	@echo "== Himmelblau (Table 4), 400 runs =="
+	@/usr/bin/python3 python/crosscheck/himmelblau_numpy.py --runs 400 --seed 1 \
+	  --compare $(CROSSCHECK_OUT)/results.json
 
 bench: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS) --target benchmarks

@@ -56,6 +56,21 @@ COLORS = {
 }
 
 
+# The double slit's wall (Figures 1 and 2): closed at the wall time except for the two slits.
+SLITS = [(-6.0, -4.0), (6.0, 8.0)]
+WALL_TIME = 1.0
+
+
+def draw_slit_wall(ax, ymin, ymax):
+    """Draws the closed parts of the wall between ymin and ymax, with one legend entry."""
+    edges = [ymin] + [v for s in SLITS for v in s] + [ymax]
+    label = "wall (open at the slits)"
+    for lo, hi in zip(edges[0::2], edges[1::2]):
+        if hi > lo:
+            ax.plot([WALL_TIME, WALL_TIME], [lo, hi], color=COLORS["wall"], lw=4, label=label)
+            label = None
+
+
 class DataError(Exception):
     """Missing or malformed figure data; the message names the file, line and column."""
 

@@ -9,17 +9,8 @@
 #                         constrained minimum, over the whole horizon [0, tf].
 import numpy as np
 
-from common import COLORS, DataError, figure_main, load_csv, save, subplots
-
-SLITS = [(-6.0, -4.0), (6.0, 8.0)]
-WALL_TIME = 1.0
-
-
-def draw_wall(ax, ymin, ymax):
-    edges = [ymin] + [v for s in SLITS for v in s] + [ymax]
-    for lo, hi in zip(edges[0::2], edges[1::2]):  # the closed parts of the wall
-        if hi > lo:
-            ax.plot([WALL_TIME, WALL_TIME], [lo, hi], color=COLORS["wall"], lw=4)
+from common import (COLORS, WALL_TIME, DataError, draw_slit_wall, figure_main, load_csv, save,
+                    subplots)
 
 
 def walks(d, name, extra=()):
@@ -42,19 +33,22 @@ def draw(d):
     for g in groups_g:
         ok = guided["passed"][g][0] > 0.5
         passed += ok
+        if not ok:  # a walk that hits the wall ends there
+            g = g[guided["t"][g] <= WALL_TIME + 1e-9]
         ax[1].plot(guided["t"][g], guided["x"][g], lw=0.8,
                    color=COLORS["implicit"] if ok else COLORS["standard"], alpha=0.8)
     ax[1].set_title(f"implicit sampling: {len(groups_g)} guided walks, "
                     f"{len(groups_g) - passed} hit the wall")
     for a in ax:
         ymin, ymax = -10.0, 10.0
-        draw_wall(a, ymin, ymax)
+        draw_slit_wall(a, ymin, ymax)
         a.set_ylim(ymin, ymax)
         a.set_xlabel("time t [s]")
         a.set_ylabel("position x [m]")
     ax[1].plot([], [], color=COLORS["implicit"], label="passes a slit")
-    ax[1].plot([], [], color=COLORS["standard"], label="hits the wall")
-    ax[1].legend(loc="upper right", fontsize=8)
+    ax[1].plot([], [], color=COLORS["standard"], label="hits the wall (ends there)")
+    for a in ax:
+        a.legend(loc="upper right", fontsize=8)
     save(fig, d, 1)
 
 

@@ -6,7 +6,7 @@
 #                     (controls [m/s]; empty at the final time t = tf, where no control acts).
 import numpy as np
 
-from common import COLORS, DataError, figure_main, load_csv, save, subplots
+from common import COLORS, DataError, draw_slit_wall, figure_main, load_csv, save, subplots
 
 
 def draw(d):
@@ -18,8 +18,10 @@ def draw(d):
     ax[0].plot(t, data["x_exact"], color=COLORS["exact"], lw=2, label="exact control")
     ax[0].plot(t, data["x_implicit"], "--", color=COLORS["implicit"], lw=1.5,
                label="implicit sampling")
-    for lo, hi in [(-6, -4), (6, 8)]:
-        ax[0].plot([1.0, 1.0], [lo, hi], color=COLORS["wall"], lw=1, alpha=0.6)
+    xs = np.concatenate([data["x_exact"], data["x_implicit"]])
+    ymin, ymax = min(-10.0, xs.min() - 1), max(10.0, xs.max() + 1)
+    draw_slit_wall(ax[0], ymin, ymax)
+    ax[0].set_ylim(ymin, ymax)
     ax[0].set_ylabel("position x [m]")
     u = np.isfinite(data["u_exact"])
     ax[1].plot(t[u], data["u_exact"][u], color=COLORS["exact"], lw=2, label="exact control")

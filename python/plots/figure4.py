@@ -21,7 +21,8 @@ def draw(d):
     fig = plt.figure(figsize=(11, 7))
     grid = fig.add_gridspec(2, 2)
     panels = [(fig.add_subplot(grid[0, 0]), "theta", "joint angle θ [rad]"),
-              (fig.add_subplot(grid[1, 0]), "dtheta", "angular velocity θ̇ [rad/s]"),
+              (fig.add_subplot(grid[1, 0]), "dtheta",
+               r"angular velocity $\dot{\theta}$ [rad/s]"),
               (fig.add_subplot(grid[:, 1]), "tau", "torque τ [N m]")]
     colors = {("exact", 1): "#1fa0a8", ("exact", 2): "#ff7f0e",
               ("wrong", 1): "#d62728", ("wrong", 2): "#1f3fb4"}

@@ -16,7 +16,8 @@ Reads from <dir> the CSV files written by `implicit mcl --out <dir>` (run_mcl):
   mcl_beacons.csv   id,x,y (the surveyed beacons)
 Left panel: GPS path, the implicit MCL reconstruction (M = 100 if present, else the largest M
 with a trajectory) and the beacons. Right panel: CPU time per filter step against err% (median
-over runs, solid; mean, dashed) for standard and implicit MCL in config A.
+over runs, open markers; mean with its standard error std/sqrt(runs), filled markers with bars)
+for standard and implicit MCL in config A; no lines join the noisy means.
 Writes <dir>/figure6.png and <dir>/figure6.svg. Exits non-zero with a message naming the file
 when an input is missing or malformed.
 """
@@ -30,8 +31,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-SUMMARY_COLUMNS = ["method", "particles", "config", "error_percent_mean", "error_percent_median",
-                   "cpu_ms_per_step"]
+SUMMARY_COLUMNS = ["method", "particles", "runs", "config", "error_percent_mean",
+                   "error_percent_std", "error_percent_median", "cpu_ms_per_step"]
 TRAJECTORY_COLUMNS = ["truth_x", "truth_y", "est_x", "est_y"]
 
 
@@ -68,7 +69,8 @@ def main():
     for i, r in enumerate(read_csv(spath, SUMMARY_COLUMNS)):
         key = (r["method"], int(number(spath, i + 2, r, "particles")), r["config"])
         summary[key] = {k: number(spath, i + 2, r, k)
-                        for k in ("error_percent_mean", "error_percent_median", "cpu_ms_per_step")}
+                        for k in ("error_percent_mean", "error_percent_std", "runs",
+                                  "error_percent_median", "cpu_ms_per_step")}
 
     # Left panel: the trajectory of implicit MCL (config A), M = 100 preferred.
     pattern = re.compile(r"^mcl_implicit_M(\d+)_trajectory\.csv$")
@@ -105,9 +107,11 @@ def main():
         med = [v["error_percent_median"] for _, v in rows]
         mean = [v["error_percent_mean"] for _, v in rows]
         cpu = [v["cpu_ms_per_step"] for _, v in rows]
-        ax2.plot(med, cpu, "o-", color=color, label=f"{method} (median err%)")
-        ax2.plot(mean, cpu, "s--", color=color, alpha=0.4, label=f"{method} (mean err%)")
-        for (m, _), x, y in zip(rows, med, cpu):
+        se = [v["error_percent_std"] / max(v["runs"], 1) ** 0.5 for _, v in rows]
+        ax2.errorbar(mean, cpu, xerr=se, fmt="s", color=color, capsize=3,
+                     label=f"{method} (mean err% ± SE)")
+        ax2.plot(med, cpu, "o", color=color, mfc="none", label=f"{method} (median err%)")
+        for (m, _), x, y in zip(rows, mean, cpu):
             ax2.annotate(str(m), (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7)
     if not plotted:
         fail(f"{spath}: expected config A rows for 'standard' or 'implicit', got none")

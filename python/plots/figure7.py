@@ -12,7 +12,8 @@ Reads from <dir> the CSV files written by `implicit slam --out <dir>` (run_slam)
   slam_<method>_M<particles>_map.csv   first data set: kind (true|estimate),id,x,y
 Left panel: true path and landmarks, and the reconstruction of implicit SLAM at M = 100 (the
 paper's variant "implicit" if present, else "implicit-rb"). Right panel: CPU time per filter step
-against err% (mean over data sets) for every method and particle number.
+against err% (mean over data sets, with its standard error std/sqrt(datasets) as a bar; markers
+only, no lines through the noisy means) for every method and particle number.
 Writes <dir>/figure7.png and <dir>/figure7.svg; exits non-zero naming the file and column when an
 input is missing or malformed.
 """
@@ -22,7 +23,8 @@ import numpy as np
 
 from common import COLORS, DataError, figure_main, load_csv, save, subplots
 
-SUMMARY = ["particles", "error_percent_mean", "cpu_ms_per_step", "map_shape_m"]
+SUMMARY = ["particles", "datasets", "error_percent_mean", "error_percent_std", "cpu_ms_per_step",
+           "map_shape_m"]
 
 
 def draw(d):
@@ -74,13 +76,14 @@ def draw(d):
         x = [s["cpu_ms_per_step"][i] for _, i in pts]
         y = [s["error_percent_mean"][i] for _, i in pts]
         color = COLORS.get(m, COLORS["implicit"] if m == "implicit" else "#2ca02c")
-        b.plot(x, y, "o-" if len(pts) > 1 else "s", color=color, label=m)
+        se = [s["error_percent_std"][i] / max(s["datasets"][i], 1) ** 0.5 for _, i in pts]
+        b.errorbar(x, y, yerr=se, fmt="o", color=color, capsize=3, label=m)
         for (p, i), xx, yy in zip(pts, x, y):
             if m != "ekf":
                 b.annotate(f"{p}", (xx, yy), fontsize=7, xytext=(3, 3), textcoords="offset points")
     b.set_xscale("log")
     b.set_xlabel("CPU time per filter step [ms]")
-    b.set_ylabel("err% of the path (mean over data sets)")
+    b.set_ylabel("err% of the path (mean ± SE over data sets)")
     b.set_title("cost vs error (labels: particles M)")
     b.legend(fontsize=8)
     save(fig, d, 7)
