@@ -197,10 +197,9 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   MclSetup setup;
   setup.start = std::chrono::steady_clock::now();
   setup.log = load_log(s.data_dir, robot::UteModel());  // Car Park folders: the Ute's geometry
-  setup.model_name =
-      resolve_model("mcl", s.model,
-                    setup.log.vehicle ? std::optional(setup.log.vehicle->model) : std::nullopt,
-                    s.data_dir.empty() ? "data/carpark" : s.data_dir);
+  setup.model_name = resolve_model(
+      "mcl", s.model, setup.log.vehicle ? std::optional(setup.log.vehicle->model) : std::nullopt,
+      s.data_dir.empty() ? "data/carpark" : s.data_dir);
   const MotionNoise noise{s.control_sd, s.state_sd};
   const robot::RangeBearingSensor sensor = mcl_sensor(s);
   if (setup.model_name == "unicycle") {

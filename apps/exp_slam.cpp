@@ -141,7 +141,8 @@ RunRecord to_record(const slam::SlamDataset& d, const slam::SlamRun& run,
                  static_cast<double>(st.skipped),
                  static_cast<double>(run.map_bytes),
                  run.wall_seconds,
-                 static_cast<double>(d.steps())};
+                 static_cast<double>(d.steps()),
+                 static_cast<double>(m.scored_steps)};
   auto append = [&r](std::size_t count) { r.push_back(static_cast<double>(count)); };
   append(d.name.size());
   for (const char c : d.name) r.push_back(static_cast<double>(c));
@@ -180,6 +181,7 @@ RunSummary from_record(const RunRecord& r) {
   out.run.map_bytes = count();
   out.run.wall_seconds = next();
   out.steps = count();
+  m.scored_steps = count();
   out.name.resize(count());
   for (auto& c : out.name) c = static_cast<char>(next());
   m.nees.resize(count());

@@ -34,7 +34,7 @@ inline void require(bool condition, fmt::format_string<Args...> format, Args&&..
 }
 
 /// Text from a data file made safe to quote in an error message: control bytes (ESC, NUL, ...)
-/// and bytes >= 0x7f become \xNN, so a message cannot move a terminal's cursor or hide text;
+/// and bytes >= 0x7f become `\xNN`, so a message cannot move a terminal's cursor or hide text;
 /// anything past max_chars is cut and marked with "...".
 inline std::string printable(std::string_view text, std::size_t max_chars = 80) {
   std::string out;

@@ -150,7 +150,7 @@ class SmallFactor<3> : public detail::DenseDiagonal<3> {
   Mat<3> l_ = Mat<3>::Identity();
 };
 
-/// The banded model: BlockTridiagonalCholesky<B> with the FactorModel interface.
+/// The banded model: `BlockTridiagonalCholesky<B>` with the FactorModel interface.
 template <int B>
 class BandedFactor : public BlockTridiagonalCholesky<B> {
  public:
