@@ -120,13 +120,15 @@ robot::TruthTrack load_or_make_reference(const LocalizationProblem& problem,
   const robot::TruthTrack t =
       filter::reference_track(problem, model, sensor, filter::ImplicitProposal{}, ro);
   std::filesystem::create_directories(dir, ec);
-  std::ofstream out(file);
-  require(static_cast<bool>(out), "mcl --truth reference: expected a writable cache file, got '{}'",
-          file.string());
+  // Written under a temporary name and renamed: MPI ranks (or two runs) that make the same cache
+  // at once each replace it whole, with the same content, and a reader never sees half a file.
+  OutputFile cache(file);
+  std::ostream& out = cache.stream();
   out << "# " << key << "\nstep,x,y,heading\n";
   for (std::size_t n = 0; n < t.position.size(); ++n)
     out << fmt::format("{},{:.17g},{:.17g},{:.17g}\n", n + 1, t.position[n](0), t.position[n](1),
                        t.heading[n]);
+  cache.commit();
   return t;
 }
 
