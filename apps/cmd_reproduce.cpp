@@ -25,8 +25,8 @@
 #include "implicit/build_info.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
-#include "parallel_runs.hpp"
 #include "implicit/core/share_dir.hpp"
+#include "parallel_runs.hpp"
 #include "registry.hpp"
 #include "report.hpp"
 

@@ -184,6 +184,7 @@ class ParticleFilter {
             fix.position(0), fix.position(1), fix.std);
     return step_impl(u, z, &fix);
   }
+
  private:
   const StepSummary& step_impl(const Control& u, std::span<const LabelledMeasurement> z,
                                const PositionFix* fix) {
