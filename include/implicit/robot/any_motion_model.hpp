@@ -26,8 +26,10 @@ concept LinearizableMotionModel = VariableStepMotionModel<M> &&
 
 class AnyMotionModel {
  public:
-  template <LinearizableMotionModel M>
-  requires(!std::same_as<std::remove_cvref_t<M>, AnyMotionModel>)
+  // The self-exclusion comes first: checking LinearizableMotionModel<AnyMotionModel> here would
+  // recurse into this constructor (clang++ 14 crashes on it).
+  template <typename M>
+  requires(!std::same_as<std::remove_cvref_t<M>, AnyMotionModel> && LinearizableMotionModel<M>)
       AnyMotionModel(M model)  // NOLINT: implicit on purpose, any model converts
       : self_(std::make_shared<const Holder<M>>(std::move(model))) {}
 
