@@ -12,12 +12,22 @@ namespace {
 
 void setup_arm(CLI::App& sub) {
   auto ctx = std::make_shared<RunContext>();
+  auto allow_empty = std::make_shared<bool>(false);
+  sub.add_flag("--allow-empty", *allow_empty,
+               "Exit 0 even when a metric is not finite; a warning is printed either way");
   add_common_options(sub, *ctx);
-  sub.callback([ctx] {
+  sub.callback([ctx, allow_empty] {
     ThreadLimit limit(ctx->threads);
     const auto r = run_arm(ArmSettings{}, *ctx);
+    const auto check = [&] {
+      require_scored(
+          r, "arm",
+          {"lqr_max_abs_diff", "final_angle_error_exact_rad", "final_angle_error_wrong_model_rad"},
+          {}, *allow_empty);
+    };
     if (ctx->json) {
       print_json(r);
+      check();
       return;
     }
     fmt::print(
@@ -27,6 +37,7 @@ void setup_arm(CLI::App& sub) {
         "  {:.2f} s\n",
         r["lqr_max_abs_diff"].get<double>(), r["final_angle_error_exact_rad"].get<double>(),
         r["final_angle_error_wrong_model_rad"].get<double>(), r["seconds"].get<double>());
+    check();
   });
 }
 

@@ -13,6 +13,7 @@ namespace {
 struct HimmelblauCommand {
   HimmelblauSettings settings;
   RunContext ctx;
+  bool allow_empty = false;
 };
 
 void setup_himmelblau(CLI::App& sub) {
@@ -23,12 +24,20 @@ void setup_himmelblau(CLI::App& sub) {
   sub.add_option("--samples,-M", cmd->settings.samples, "Samples M per psi estimate")
       ->check(in_range(1, 1000000))
       ->capture_default_str();
+  sub.add_flag("--allow-empty", cmd->allow_empty,
+               "Exit 0 even when a metric is not finite; a warning is printed either way");
   add_common_options(sub, cmd->ctx);
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     const auto r = run_himmelblau(cmd->settings, cmd->ctx);
+    const auto check = [&] {
+      require_scored(r, "himmelblau",
+                     {"mean_cost", "mean_final_f", "mean_f_before_last_step", "newton_final_f"}, {},
+                     cmd->allow_empty);
+    };
     if (cmd->ctx.json) {
       print_json(r);
+      check();
       return;
     }
     fmt::print(
@@ -47,6 +56,7 @@ void setup_himmelblau(CLI::App& sub) {
         r["mean_f_before_last_step"].get<double>(), r["mean_f_before_last_step_se"].get<double>(),
         r["mean_cost_last_step_adjusted"].get<double>(),
         r["mean_cost_last_step_adjusted_se"].get<double>(), r["seconds"].get<double>());
+    check();
   });
 }
 

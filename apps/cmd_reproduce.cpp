@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <ctime>
 #include <fstream>
@@ -30,6 +31,7 @@
 #include "registry.hpp"
 #include "report.hpp"
 #include "reproduce_plan.hpp"
+#include "results_file.hpp"
 
 namespace implicit::app {
 namespace {
@@ -355,24 +357,7 @@ int reproduce(RunContext ctx, const ReproduceOptions& opt) {
   json results;
   if (opt.report_only) {
     const auto file = ctx.out_dir / "results.json";
-    std::ifstream in(file);
-    if (!in)
-      throw InvalidArgument(
-          fmt::format("--report-only: expected {} from an earlier run, got no "
-                      "such file",
-                      file.string()));
-    try {
-      results = json::parse(in);
-    } catch (const json::parse_error& e) {
-      throw ParseError(fmt::format("{}: {}", file.string(), e.what()));
-    }
-    // `{}` or another program's JSON is not an earlier run: say so instead of an empty report.
-    if (!results.is_object() || results.value("schema", json()) != "implicit-reproduce-1" ||
-        !results.contains("experiments") || !results["experiments"].is_object())
-      throw ParseError(
-          fmt::format("{}: expected the results.json of `implicit reproduce` (\"schema\": "
-                      "\"implicit-reproduce-1\" and an \"experiments\" object), got {}",
-                      file.string(), printable(results.dump(), 60)));
+    results = read_results(file);
     try {
       return finish(results, ctx, opt);
     } catch (const json::exception& e) {

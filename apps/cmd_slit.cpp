@@ -13,6 +13,7 @@ namespace {
 struct SlitCommand {
   SlitSettings settings;
   RunContext ctx;
+  bool allow_empty = false;
 };
 
 void setup_slit(CLI::App& sub) {
@@ -36,12 +37,19 @@ void setup_slit(CLI::App& sub) {
                  "Plain Monte Carlo walks counted for the pass rate")
       ->check(in_range(1, 100000000))
       ->capture_default_str();
+  sub.add_flag("--allow-empty", cmd->allow_empty,
+               "Exit 0 even when a metric is not finite; a warning is printed either way");
   add_common_options(sub, cmd->ctx);
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     const auto r = run_slit(cmd->settings, cmd->ctx);
+    const auto check = [&] {
+      require_scored(r, "slit", {"error_x_mean", "error_u_mean", "crash_fraction"}, {},
+                     cmd->allow_empty);
+    };
     if (cmd->ctx.json) {
       print_json(r);
+      check();
       return;
     }
     fmt::print(
@@ -58,6 +66,7 @@ void setup_slit(CLI::App& sub) {
         r["crash_fraction"].get<double>(), r["exact_crash_fraction"].get<double>(),
         r["naive_mc_passed"].get<int>(), r["naive_mc_samples"].get<int>(),
         r["seconds"].get<double>());
+    check();
   });
 }
 

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/ostream.h>
 #include <nlohmann/json_fwd.hpp>
 
 namespace implicit::app {
@@ -80,6 +81,11 @@ class OutputFile {
   OutputFile(const OutputFile&) = delete;
   OutputFile& operator=(const OutputFile&) = delete;
   std::ostream& stream();
+  /// Formatted text, as fmt::print (the CSV writers use it).
+  template <typename... T>
+  void print(fmt::format_string<T...> format, T&&... args) {
+    fmt::print(stream(), format, std::forward<T>(args)...);
+  }
   /// True when the file did not exist before (to write a CSV header once in append mode).
   bool fresh() const { return fresh_; }
   void commit();

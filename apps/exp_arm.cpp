@@ -24,7 +24,7 @@ nlohmann::json run_arm(const ArmSettings&, const RunContext& ctx) {
   const auto semi_sim = control::simulate_arm(semi, plant, plant);
 
   if (!ctx.out_dir.empty()) {
-    auto out = fmt::output_file(ctx.csv_path("figure4_arm.csv").string());
+    OutputFile out(ctx.csv_path("figure4_arm.csv"));
     out.print(
         "t,theta1_exact,theta2_exact,dtheta1_exact,dtheta2_exact,tau1_exact,tau2_exact,"
         "theta1_wrong,theta2_wrong,dtheta1_wrong,dtheta2_wrong,tau1_wrong,tau2_wrong\n");
@@ -40,6 +40,7 @@ nlohmann::json run_arm(const ArmSettings&, const RunContext& ctx) {
       }
       out.print("\n");
     }
+    out.commit();
   }
   auto vec = [](const auto& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
   const double seconds =

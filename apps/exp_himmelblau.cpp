@@ -110,8 +110,12 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
   const auto [mean_f19, f19_se] = mean_se(f19);
 
   if (!ctx.out_dir.empty()) {
+    // The three files are renamed into place together, once all are written.
+    OutputFile table4(ctx.csv_path("table4_himmelblau.csv"));
+    OutputFile newton_csv(ctx.csv_path("figure5_newton.csv"));
+    OutputFile runs_csv(ctx.csv_path("figure5_runs.csv"));
     {
-      auto out = fmt::output_file(ctx.csv_path("table4_himmelblau.csv").string());
+      OutputFile& out = table4;
       out.print("k,newton");
       const int shown = std::min(5, s.runs);
       for (int r = 0; r < shown; ++r) out.print(",run{}", r + 1);
@@ -128,20 +132,21 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
       }
     }
     {
-      auto out = fmt::output_file(ctx.csv_path("figure5_newton.csv").string());
+      OutputFile& out = newton_csv;
       out.print("k,x1,x2,f\n");
       for (std::size_t k = 0; k < newton.size(); ++k)
         out.print("{},{:.10f},{:.10f},{:.10f}\n", k, newton[k](0), newton[k](1),
                   control::himmelblau(newton[k]));
     }
     {
-      auto out = fmt::output_file(ctx.csv_path("figure5_runs.csv").string());
+      OutputFile& out = runs_csv;
       out.print("run,k,x1,x2,f\n");
       for (std::size_t r = 0; r < runs.size(); ++r)
         for (std::size_t k = 0; k < runs[r].x.size(); ++k)
           out.print("{},{},{:.10f},{:.10f},{:.10f}\n", r, k, runs[r].x[k](0), runs[r].x[k](1),
                     control::himmelblau(runs[r].x[k]));
     }
+    for (OutputFile* f : {&table4, &newton_csv, &runs_csv}) f->commit();
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

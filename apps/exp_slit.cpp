@@ -31,9 +31,8 @@ control::SlitEstimator estimator_from_mode(const std::string& mode) {
 }
 
 // Figure 1 (left): the first `count` plain Monte Carlo walks up to the wall, every 2nd step.
-void write_unguided(const std::filesystem::path& path, const control::DoubleSlit& slit,
+void write_unguided(OutputFile& out, const control::DoubleSlit& slit,
                     const Eigen::MatrixXd& walks) {
-  auto out = fmt::output_file(path.string());
   out.print("path,t,x\n");
   for (Eigen::Index j = 0; j < walks.cols(); ++j)
     for (int k = 0; k <= slit.wall_step(); k += 2)
@@ -41,8 +40,7 @@ void write_unguided(const std::filesystem::path& path, const control::DoubleSlit
 }
 
 // Figure 1 (right): M guided walks of implicit sampling at (x(0), t = 0), dominant slit.
-void write_guided(const std::filesystem::path& path, const control::DoubleSlit& slit, int M,
-                  std::uint64_t seed) {
+void write_guided(OutputFile& out, const control::DoubleSlit& slit, int M, std::uint64_t seed) {
   const double x0 = slit.parameters().initial_state;
   const auto left = slit.constrained_minimum(x0, 0, 0), right = slit.constrained_minimum(x0, 0, 1);
   const int s = left.phi <= right.phi ? 0 : 1;
@@ -51,7 +49,6 @@ void write_guided(const std::filesystem::path& path, const control::DoubleSlit& 
   Eigen::MatrixXd xi(n, M), paths;
   rng.fill_normal(xi);
   const auto lw = slit.path_log_weights(x0, 0, s, xi, nullptr, &paths);
-  auto out = fmt::output_file(path.string());
   out.print("path,t,x,passed\n");
   for (int j = 0; j < M; ++j) {
     const int passed = std::isfinite(lw[static_cast<std::size_t>(j)]) ? 1 : 0;
@@ -61,9 +58,7 @@ void write_guided(const std::filesystem::path& path, const control::DoubleSlit& 
   }
 }
 
-void write_run(const std::filesystem::path& path, const control::DoubleSlit& slit,
-               const control::SlitRun& run) {
-  auto out = fmt::output_file(path.string());
+void write_run(OutputFile& out, const control::DoubleSlit& slit, const control::SlitRun& run) {
   out.print("t,x_exact,x_implicit,u_exact,u_implicit\n");
   const int K = slit.num_steps();
   for (int k = 0; k <= K; ++k) {
@@ -130,12 +125,15 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
   const auto large = slit.plain_monte_carlo(x0, 0, s.naive_mc_large, ctx.seed, 2);
 
   if (!ctx.out_dir.empty()) {
-    write_unguided(ctx.csv_path("figure1_unguided.csv"), slit, walks);
-    write_guided(ctx.csv_path("figure1_guided.csv"), slit, 50, ctx.seed);
+    // Every file is written under a temporary name and renamed only when all are complete.
+    OutputFile unguided(ctx.csv_path("figure1_unguided.csv"));
+    OutputFile guided(ctx.csv_path("figure1_guided.csv"));
+    OutputFile figure2(ctx.csv_path("figure2_slit.csv"));
+    write_unguided(unguided, slit, walks);
+    write_guided(guided, slit, 50, ctx.seed);
     const auto run0 = control::simulate_slit_run(slit, s.samples, estimator, ctx.seed, 0);
-    write_run(ctx.csv_path("figure2_slit.csv"), slit, run0);
-    auto out = fmt::output_file(
-        ctx.csv_path(fmt::format("slit_runs_{}_M{}.csv", s.mode, s.samples)).string());
+    write_run(figure2, slit, run0);
+    OutputFile out(ctx.csv_path(fmt::format("slit_runs_{}_M{}.csv", s.mode, s.samples)));
     out.print("run,error_x,error_u,crashed_exact,crashed_implicit,fallbacks,ess_mean\n");
     for (std::size_t r = 0; r < table.runs.size(); ++r) {
       const auto& row = table.runs[r];
@@ -143,6 +141,7 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
                 row.crashed_exact ? 1 : 0, row.crashed_estimate ? 1 : 0, row.fallbacks,
                 row.ess_mean);
     }
+    for (OutputFile* f : {&unguided, &guided, &figure2, &out}) f->commit();
   }
 
   const double seconds =

@@ -1,5 +1,6 @@
-// Fuzz target: results.json as `implicit reproduce --report-only` reads it (apps/report.cpp,
-// apps/report_content.cpp): parse, build the report, render Markdown and HTML, write the tables.
+// Fuzz target: results.json as `implicit reproduce --report-only` reads it (apps/results_file.cpp,
+// apps/report.cpp, apps/report_content.cpp): parse and check, build the report, render Markdown and
+// HTML, write the tables.
 //
 // Malformed or wrongly typed JSON must end in an exception that `implicit` turns into an error
 // message and exit 1: ParseError, InvalidArgument, or one of nlohmann::json's own exceptions.
@@ -7,19 +8,22 @@
 // finding.
 
 #include <cstdint>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
 #include "implicit/core/error.hpp"
 #include "report.hpp"
+#include "results_file.hpp"
 #include "scratch.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   namespace report = implicit::app::report;
   nlohmann::json results;
   try {
-    results = nlohmann::json::parse(data, data + size);
-  } catch (const nlohmann::json::exception&) {  // parse_error, or out_of_range for 1e999
+    const std::string_view text(reinterpret_cast<const char*>(data), size);
+    results = implicit::app::parse_results(text, "results.json");
+  } catch (const implicit::ParseError&) {  // what --report-only reports and exits 1 for
     return 0;
   }
   const auto& dir = implicit::fuzz::scratch().path();

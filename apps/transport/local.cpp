@@ -1,11 +1,27 @@
 // One process: the transport of the build without MPI.
+#include <cstdio>
 #include <cstdlib>
+#include <string>
 
 #include "transport.hpp"
 
 namespace implicit::app::transport {
 
-bool start(int*, char***) { return false; }
+// Started by mpirun or srun with several processes, a build without MPI would run the whole
+// command in every process, each writing the same files: refuse, saying what to do instead.
+bool start(int*, char***) {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"}) {
+    const char* value = std::getenv(name);
+    if (value == nullptr || std::atoi(value) <= 1) continue;
+    std::fprintf(stderr,
+                 "implicit: started as one of %s processes of an MPI job (%s), but this build "
+                 "has no MPI: every process would run the whole command. Build with "
+                 "-DIMPLICIT_WITH_MPI=ON (docs/cluster.md), or run without the launcher.\n",
+                 value, name);
+    std::exit(2);
+  }
+  return false;
+}
 void stop() {}
 void abort_job(int code) { std::exit(code); }
 int rank() { return 0; }

@@ -3,9 +3,11 @@
 // that cannot be written (exit 1); and what every subcommand shows and prints.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -163,6 +165,67 @@ TEST(Cli, ReportOnlyWithWronglyTypedJsonNamesTheFile) {
       run_cli("reproduce --report-only --no-figures --quiet --out " + dir.path().string());
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_NE(r.err.find((dir.path() / "results.json").string() + ": "), std::string::npos) << r.err;
+}
+
+TEST(Cli, ReportOnlyWithANumberBeyondADoubleNamesTheFile) {
+  TempDir dir("report_only_1e999");
+  std::ofstream(dir.path() / "results.json")
+      << R"({"schema": "implicit-reproduce-1", "experiments": {}, "seconds_total": 1e999})";
+  const auto r =
+      run_cli("reproduce --report-only --no-figures --quiet --out " + dir.path().string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find((dir.path() / "results.json").string() + ": "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("out_of_range"), std::string::npos) << r.err;
+}
+
+// A count the report reads as an int, written as a huge double: converting it was undefined
+// behaviour (found by fuzz_results_json under UBSan); now a range error naming where it is.
+TEST(Cli, ReportOnlyWithACountOutOfRangeNamesItsPlace) {
+  TempDir dir("report_only_huge_count");
+  std::ofstream(dir.path() / "results.json")
+      << R"({"schema": "implicit-reproduce-1", "experiments": {"slit": [{"settings": )"
+      << R"({"runs": 7.8e100}}]}})";
+  const auto r =
+      run_cli("reproduce --report-only --no-figures --quiet --out " + dir.path().string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find((dir.path() / "results.json").string() +
+                       ": the number at /experiments/slit/0/settings/runs is 7.8e+100, out of "
+                       "range (|x| < 2^31)"),
+            std::string::npos)
+      << r.err;
+}
+
+// slit, arm and himmelblau write their CSVs like mcl and slam: under temporary names renamed
+// only when complete, so an unwritable folder is an error (exit 1) naming the file.
+TEST(Cli, ControlCommandsOutIntoUnwritableFolderExit1) {
+  for (const std::string command :
+       {"slit --runs 2 --naive-small 5 --naive-large 5", "arm", "himmelblau --runs 2 -M 10"}) {
+    const auto r = run_cli(command + " --quiet --out /proc/self");
+    EXPECT_EQ(r.code, 1) << command << "\n" << r.err;
+    EXPECT_NE(r.err.find("expected a writable output file"), std::string::npos) << command << "\n"
+                                                                                << r.err;
+  }
+}
+
+TEST(Cli, ControlCommandsLeaveOnlyCompleteFiles) {
+  TempDir dir("control_outputs");
+  const auto r =
+      run_cli("slit --runs 3 --naive-small 5 --naive-large 5 --quiet --out " + dir.path().string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  // .resume/ holds the finished runs' records for --resume (docs/cluster.md), on purpose.
+  const std::vector<std::string> expected = {".resume", "figure1_guided.csv",
+                                             "figure1_unguided.csv", "figure2_slit.csv",
+                                             "slit_runs_corrected_M50.csv"};
+  EXPECT_EQ(names, expected);
+  std::ifstream runs(dir.path() / "slit_runs_corrected_M50.csv");
+  std::string line;
+  int lines = 0;
+  while (std::getline(runs, line)) ++lines;
+  EXPECT_EQ(lines, 1 + 3);  // header and one row per run
 }
 
 TEST(Cli, SigtermStopsWithAMessageAndLeavesNoPartialOutput) {

@@ -99,6 +99,14 @@ def main():
                     if files.get(k) != ref_files.get(k):
                         print(f"  file {k} differs")
     failures += check_failure_and_resume(implicit_mpi, implicit_serial, launch, work)
+    # The build without MPI under a launcher would run everything twice: it refuses (exit 2).
+    refused = run(launch + ["-n", "2", implicit_serial, "himmelblau", "--runs", "2", "--quiet"],
+                  expect=2)
+    if "this build has no MPI" not in refused.stderr:
+        failures += 1
+        print(f"serial build under mpirun: no explanation\n{refused.stderr[-2000:]}")
+    else:
+        print("serial build under mpirun: refused with a message")
     if failures:
         sys.exit(f"FAIL: {failures} comparisons differ")
     print("all comparisons equal")

@@ -139,6 +139,22 @@ TEST(RobotLog, ScheduleAndTruthInterpolation) {
   EXPECT_TRUE(std::isnan(t.heading[0]));  // one neighbour has no heading
 }
 
+// A log whose scans come before every step (here: no control at all) gives a schedule with no
+// step and every scan skipped; finding the neighbours of a scan in an empty step list was undefined
+// behaviour (fuzz/corpus/robot_log/scan_before_every_control.log replays it under the sanitizers).
+TEST(RobotLog, ScheduleOfScansBeforeEveryControl) {
+  const RobotLog none = parse("initial 1 0 0 0 0 0 0\nscan 0.5 0\n");
+  const StepSchedule s = make_schedule(none, 1.0, 0.0125);
+  EXPECT_TRUE(s.steps.empty());
+  EXPECT_EQ(s.scans_used, 0);
+  EXPECT_EQ(s.scans_skipped, 1);
+  const RobotLog early = parse("initial 1 0 0 0 0 0 0\ncontrol 1.025 1 0\nscan 0.5 0\n");
+  const StepSchedule e = make_schedule(early, 1.0, 0.0125);
+  ASSERT_EQ(e.steps.size(), 1u);
+  EXPECT_EQ(e.steps[0].scan, -1);
+  EXPECT_EQ(e.scans_skipped, 1);
+}
+
 // A GPS outage: fixes at 0 and 0.2 s, then none until 10 s. Steps inside the short interval are
 // interpolated; a step in the outage has no truth (a straight line is not where the vehicle
 // was), unless the caller allows a longer gap.
@@ -180,7 +196,7 @@ TEST(RobotLog, RejectsMalformedInputNamingLineAndField) {
       {"scan 1 1\nobs 1 0.5\nobs 2 0.5\n", "test.log:3: expected an 'obs' line only after"},
       {"scan 1 2\nobs 1 0.5\ncontrol 1 1 1\n", "test.log:3: expected 1 more 'obs' line(s)"},
       {"scan 1 1\nobs -1 0.5\n", "test.log:2: field 'range': expected >= 0, got -1"},
-      {"odometry 1 2 3\n", "test.log:1: expected a record kind vehicle|landmark|initial|control"},
+      {"odometry 1 2 3\n", "test.log:1: expected a record kind landmark|initial|control"},
       {"initial 0 0 0 0 0.1 -0.1 0.1\n", "test.log:1: field 'std_y': expected a non-negative"},
       {"truth 1 0 inf\n", "test.log:1: field 'y': expected a finite number, got 'inf'"},
   };
