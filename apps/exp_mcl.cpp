@@ -382,6 +382,7 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   j["error_percent_median"] = median_of(err);
   j["error_percent_runs"] = err;
   j["rmse_m"] = mean_of(rmse);
+  j["rmse_m_std"] = sd_of(rmse);
   j["rmse_m_median"] = median_of(rmse);
   j["max_error_m_median"] = median_of(max_err);
   j["heading_rmse_rad"] = mean_of(hrmse);

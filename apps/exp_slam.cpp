@@ -354,13 +354,17 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["error_percent_std"] = stddev(err);
   j["error_percent_median"] = median(err);
   j["error_aligned_percent_mean"] = mean(err_al);
+  j["error_aligned_percent_std"] = stddev(err_al);
   j["map_shape_m"] = mean(shape);
+  j["map_shape_m_std"] = stddev(shape);
   j["ess_mean"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(ess));
   j["resamplings"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(res));
   j["rmse_pose_m"] = mean(rmse_p);
+  j["rmse_pose_m_std"] = stddev(rmse_p);
   j["rmse_pose_aligned_m"] = mean(rmse_pa);
   j["rmse_heading_rad"] = mean(rmse_h);
   j["rmse_map_m"] = mean(rmse_m);
+  j["rmse_map_m_std"] = stddev(rmse_m);
   j["landmarks_mean"] = mean(lms);
   j["detections_skipped"] = skipped;
   j["map_bytes_mean"] = mean(mapbytes);
