@@ -47,7 +47,9 @@ Table slit_table(const json& results, const json& paper, const json& ref) {
         return agreement(ours_estimate(ours, qs),
                          reference_estimate(r[qs + "_mean"][i], r[qs + "_std"][i], ref_runs));
       };
-      auto ours = [&](const json* r) { return cell(r, [&](const json& x) { return spread(x, qs, 2); }); };
+      auto ours = [&](const json* r) {
+        return cell(r, [&](const json& x) { return spread(x, qs, 2); });
+      };
       t.rows.push_back({std::to_string(m), qs == "error_x" ? "e_x %" : "e_u %",
                         pm(paper[qs + "_mean"][i], paper[qs + "_std"][i], 2), ref_cell("paper"),
                         ours(rp), agree(rp, "paper"), ref_cell("corrected"), ours(rc),
@@ -221,7 +223,8 @@ Table himmelblau_table(const json* run, const json* many, const json& paper, con
   t.caption = "Himmelblau: Newton's method and stochastic control from (−1, −4)";
   // The closed loop is a discrete Brownian bridge around the basin's minimum, so the expected
   // cost has a closed form (himmelblau.hpp); runs carry it as "expected".
-  t.header = {"quantity", "paper", "reference", "closed form", "ours", "agree (reference)",
+  t.header = {"quantity",           "paper", "reference",
+              "closed form",        "ours",  "agree (reference)",
               "agree (closed form)"};
   auto expected = [&](const json* r, const char* key, int digits) {
     return cell(r, [&](const json& x) {
@@ -232,16 +235,16 @@ Table himmelblau_table(const json* run, const json* many, const json& paper, con
   auto mean_se = [](const json* r, const std::string& key, int digits) {
     return cell(r, [&](const json& x) {
       std::string c = number(get(x, key), digits);
-      if (get(x, key + "_se").is_number()) c += " (SE " + format_se(x[key + "_se"].get<double>()) + ")";
+      if (get(x, key + "_se").is_number())
+        c += " (SE " + format_se(x[key + "_se"].get<double>()) + ")";
       return c;
     });
   };
   // The reference's `mean_cost_sd` is the standard error of its 400-run mean
   // (data/report/README.md).
-  const Estimate ref_cost{get(ref, "mean_cost").is_number() ? ref["mean_cost"].get<double>()
-                                                            : Estimate().mean,
-                          get(ref, "mean_cost_sd").is_number() ? ref["mean_cost_sd"].get<double>()
-                                                               : Estimate().se};
+  const Estimate ref_cost{
+      get(ref, "mean_cost").is_number() ? ref["mean_cost"].get<double>() : Estimate().mean,
+      get(ref, "mean_cost_sd").is_number() ? ref["mean_cost_sd"].get<double>() : Estimate().se};
   auto cost_row = [&](const json* r, std::string label, std::string paper_cell) {
     return std::vector<std::string>{
         std::move(label),
@@ -257,8 +260,8 @@ Table himmelblau_table(const json* run, const json* many, const json& paper, con
                     value_cell(run, "newton_final_f", 4), "–", "–"});
   t.rows.push_back({"runs", std::to_string(paper["runs_total"].get<int>()),
                     number(ref["mean_cost_runs"], 0), "–", int_cell(run, "runs"), "–", "–"});
-  t.rows.push_back(
-      {"runs ending with f < 10", "70 (all)", "all", "–", int_cell(run, "runs_below_10"), "–", "–"});
+  t.rows.push_back({"runs ending with f < 10", "70 (all)", "all", "–",
+                    int_cell(run, "runs_below_10"), "–", "–"});
   t.rows.push_back(cost_row(run, "mean cost Ĉ", "≈ " + number(paper["mean_cost"], 2)));
   t.rows.push_back({"mean f(x_19), before the last step", "table stops here",
                     number(ref["mean_f_x19"], 2) + " ± 0.12 (SE)",
@@ -345,6 +348,5 @@ void himmelblau_section(Document& doc, const json& results, const Numbers& numbe
   });
   settings_list(doc, results, "himmelblau");
 }
-
 
 }  // namespace implicit::app::report::parts

@@ -53,10 +53,17 @@ Table mcl_reference_table(const json& results, const json& ref) {
   Table r;
   r.caption = fmt::format("Against the independent reference implementation ({} seeds)",
                           ref["runs"].get<int>());
-  r.header = {"config",         "M",           "method",
-              "reference err%", "ours err%",   "agree",
-              "reference RMSE [m]", "ours RMSE [m]", "reference lost",
-              "ours lost",      "runs"};
+  r.header = {"config",
+              "M",
+              "method",
+              "reference err%",
+              "ours err%",
+              "agree",
+              "reference RMSE [m]",
+              "ours RMSE [m]",
+              "reference lost",
+              "ours lost",
+              "runs"};
   for (const auto& row : ref["rows"]) {
     const std::string config = row["config"];
     const int m = row["particles"];
@@ -88,8 +95,7 @@ Table mcl_paper_table(const json& results, const json& paper, const std::vector<
   for (const int m : ms) {
     const std::size_t pi = paper_index(paper, m);
     const json* run = find_mcl(results, method, m, "A");
-    const bool paper_has =
-        pi < paper["samples"].size() && paper[method + "_error"][pi].is_number();
+    const bool paper_has = pi < paper["samples"].size() && paper[method + "_error"][pi].is_number();
     if (!run && !paper_has) continue;
     t.rows.push_back({std::to_string(m), at(paper[method + "_error"], pi, 2), err_cell(run),
                       mean_se_cell(run, "rmse_m", "rmse_m_std", 2), int_cell(run, "lost_runs"),
@@ -115,8 +121,9 @@ Table slam_reference_table(const json& results, const json& ref) {
       "Against the independent reference implementation (M = {}, {} data sets; the last four "
       "columns: reference / ours)",
       m, ref["datasets"].get<int>());
-  r.header = {"method",        "reference err%", "ours err%", "agree", "pose RMSE [m]",
-              "landmark RMSE [m]", "map shape [m]", "ESS/M", "resamplings"};
+  r.header = {"method",        "reference err%", "ours err%",
+              "agree",         "pose RMSE [m]",  "landmark RMSE [m]",
+              "map shape [m]", "ESS/M",          "resamplings"};
   for (const auto& row : ref["rows"]) {
     const std::string method = row["method"];
     const bool ekf = method == "ekf";
@@ -129,9 +136,11 @@ Table slam_reference_table(const json& results, const json& ref) {
     r.rows.push_back(
         {method, pm(row["error_percent_mean"], row["error_percent_std"], 2), err_cell(run),
          agreement(ours_estimate(run, "error_percent"), reference),
-         both(number(row["rmse_pose_m"], 2), mean_se_cell(run, "rmse_pose_m", "rmse_pose_m_std", 2)),
+         both(number(row["rmse_pose_m"], 2),
+              mean_se_cell(run, "rmse_pose_m", "rmse_pose_m_std", 2)),
          both(number(row["rmse_map_m"], 2), mean_se_cell(run, "rmse_map_m", "rmse_map_m_std", 2)),
-         both(number(row["map_shape_m"], 3), mean_se_cell(run, "map_shape_m", "map_shape_m_std", 3)),
+         both(number(row["map_shape_m"], 3),
+              mean_se_cell(run, "map_shape_m", "map_shape_m_std", 3)),
          both(number(row["ess_mean"], 3), ekf ? "–" : ess_fraction_cell(run, m, 3)),
          both(number(row["resamplings"], 0), ekf ? "–" : value_cell(run, "resamplings", 0))});
   }
@@ -167,12 +176,11 @@ Table slam_ekf_table(const json& results, const json& paper, const json& ref) {
   Table e;
   e.caption = "EKF-SLAM";
   e.header = {"", "paper", "reference", "ours", "agree (reference)"};
-  e.rows.push_back(
-      {"err%", number(paper["ekf_error"], 2),
-       pm(row["error_percent_mean"], row["error_percent_std"], 2), err_cell(ekf),
-       agreement(ours_estimate(ekf, "error_percent"),
-                 reference_estimate(row["error_percent_mean"], row["error_percent_std"],
-                                    ref["datasets"]))});
+  e.rows.push_back({"err%", number(paper["ekf_error"], 2),
+                    pm(row["error_percent_mean"], row["error_percent_std"], 2), err_cell(ekf),
+                    agreement(ours_estimate(ekf, "error_percent"),
+                              reference_estimate(row["error_percent_mean"],
+                                                 row["error_percent_std"], ref["datasets"]))});
   e.rows.push_back({"map shape [m]", "–", number(row["map_shape_m"], 3),
                     mean_se_cell(ekf, "map_shape_m", "map_shape_m_std", 3), "–"});
   e.rows.push_back({"CPU [ms/step]", number(paper["ekf_cpu_ms"], 2), "–",
@@ -206,11 +214,10 @@ void mcl_section(Document& doc, const json& results, const Numbers& numbers) {
       "Converged err% (M = 10^4, implicit) in the reference: {}–{} % in config A, {} % in "
       "config B; dead reckoning alone gives {} %. The paper's 2.0–2.3 % lies between the two "
       "configurations.",
-      number(converged[0], 2), number(converged[1], 2),
-      number(ref["converged_error_percent_B"], 2), number(ref["dead_reckoning_error_percent"], 1)));
-  const auto ms = particle_counts(results, "mcl", paper, [](const json& s) {
-    return s.value("config", std::string()) == "A";
-  });
+      number(converged[0], 2), number(converged[1], 2), number(ref["converged_error_percent_B"], 2),
+      number(ref["dead_reckoning_error_percent"], 1)));
+  const auto ms = particle_counts(
+      results, "mcl", paper, [](const json& s) { return s.value("config", std::string()) == "A"; });
   for (const std::string method : {"implicit", "standard"})
     doc.table(mcl_paper_table(results, paper, ms, method));
   figure(doc, results, 6,

@@ -26,8 +26,8 @@ json read_numbers_file(const std::filesystem::path& file,
     throw ParseError(fmt::format("{}: not valid JSON ({})", file.string(), e.what()));
   }
   if (!j.is_object())
-    throw ParseError(fmt::format("{}: expected a JSON object, got {}", file.string(),
-                                 printable(j.dump(), 40)));
+    throw ParseError(
+        fmt::format("{}: expected a JSON object, got {}", file.string(), printable(j.dump(), 40)));
   if (!j.contains("source") || !j["source"].is_string())
     throw ParseError(fmt::format("{}: expected a \"source\" string", file.string()));
   for (const auto& key : required)

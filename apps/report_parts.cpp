@@ -126,7 +126,6 @@ void experiment_status(Document& doc, const json& results, const std::string& ex
   doc.paragraph(text);
 }
 
-
 std::string mean_se_cell(const json* run, const std::string& key, const std::string& sd_key,
                          int digits) {
   return cell(run, [&](const json& r) {
