@@ -359,6 +359,8 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["map_shape_m_std"] = stddev(shape);
   j["ess_mean"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(ess));
   j["resamplings"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(res));
+  j["ess_std"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(stddev(ess));
+  j["resamplings_std"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(stddev(res));
   j["rmse_pose_m"] = mean(rmse_p);
   j["rmse_pose_m_std"] = stddev(rmse_p);
   j["rmse_pose_aligned_m"] = mean(rmse_pa);

@@ -100,7 +100,8 @@ Table mcl_paper_table(const json& results, const json& paper, const std::vector<
     t.rows.push_back({std::to_string(m), at(paper[method + "_error"], pi, 2), err_cell(run),
                       mean_se_cell(run, "rmse_m", "rmse_m_std", 2), int_cell(run, "lost_runs"),
                       ess_fraction_cell(run, m, 2), at(paper[method + "_cpu_ms"], pi, 2),
-                      value_cell(run, "cpu_ms_per_step", 4), int_cell(run, "runs")});
+                      mean_se_cell(run, "cpu_ms_per_step", "cpu_ms_per_step_std", 4),
+                      int_cell(run, "runs")});
   }
   return t;
 }
@@ -142,7 +143,8 @@ Table slam_reference_table(const json& results, const json& ref) {
          both(number(row["map_shape_m"], 3),
               mean_se_cell(run, "map_shape_m", "map_shape_m_std", 3)),
          both(number(row["ess_mean"], 3), ekf ? "–" : ess_fraction_cell(run, m, 3)),
-         both(number(row["resamplings"], 0), ekf ? "–" : value_cell(run, "resamplings", 0))});
+         both(number(row["resamplings"], 0),
+              ekf ? "–" : mean_se_cell(run, "resamplings", "resamplings_std", 0))});
   }
   return r;
 }
@@ -164,7 +166,8 @@ Table slam_paper_table(const json& results, const json& paper, const std::vector
         {std::to_string(m), paper_has ? at(paper[pkey + "_error"], pi, 2) : "–", err_cell(run),
          mean_se_cell(run, "error_aligned_percent_mean", "error_aligned_percent_std", 2),
          mean_se_cell(run, "map_shape_m", "map_shape_m_std", 3), ess_fraction_cell(run, m, 3),
-         value_cell(run, "resamplings", 0), paper_has ? at(paper[pkey + "_cpu_ms"], pi, 2) : "–",
+         mean_se_cell(run, "resamplings", "resamplings_std", 0),
+         paper_has ? at(paper[pkey + "_cpu_ms"], pi, 2) : "–",
          value_cell(run, "cpu_ms_per_step", 4), int_cell(run, "datasets")});
   }
   return t;
@@ -257,7 +260,8 @@ void slam_section(Document& doc, const json& results, const Numbers& numbers) {
       "err% is the paper's metric for the robot path (mean ± sd over data sets, SE of the mean "
       "in brackets); aligned err% is the same after the best rigid alignment of the estimated "
       "map to the true one; map shape is the landmark RMSE after that alignment. CPU time is "
-      "per filter step. **implicit** is the paper's variant (A), **implicit-rb** the "
+      "per filter step (the CPU time of all data sets over all their steps, so without SE). "
+      "**implicit** is the paper's variant (A), **implicit-rb** the "
       "Rao-Blackwellized variant (B) with EKF landmarks. The paper's Table 6 does not "
       "reproduce (below), so the comparison with the reference comes first.");
   doc.table(slam_reference_table(results, ref));

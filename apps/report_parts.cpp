@@ -7,6 +7,10 @@
 
 namespace implicit::app::report::parts {
 
+const json& run_count(const json& result) {
+  return get(result, "runs").is_number() ? result["runs"] : get(result, "datasets");
+}
+
 Numbers numbers_of(const json& results) {
   Numbers n;
   n.paper = results.contains("paper") && results["paper"].is_object() ? results["paper"]
@@ -53,7 +57,11 @@ std::string ess_fraction_cell(const json* run, int m, int digits) {
   return cell(run, [&](const json& r) {
     if (!r.contains("ess_mean") || !r["ess_mean"].is_number() || m <= 0) return std::string("–");
     const double e = r["ess_mean"].get<double>();
-    return number(e > 1.0 ? e / m : e, digits);
+    const double scale = e > 1.0 ? 1.0 / m : 1.0;  // the sd is in the same unit as the mean
+    std::string s = number(e * scale, digits);
+    const double se = standard_error(get(r, "ess_std"), run_count(r));
+    if (std::isfinite(se)) s += " (SE " + format_se(se * scale) + ")";
+    return s;
   });
 }
 
@@ -131,8 +139,7 @@ std::string mean_se_cell(const json* run, const std::string& key, const std::str
   return cell(run, [&](const json& r) {
     if (!r.contains(key)) return std::string("–");
     std::string s = number(r.at(key), digits);
-    const double se =
-        standard_error(get(r, sd_key), get(r, "runs").is_number() ? r["runs"] : get(r, "datasets"));
+    const double se = standard_error(get(r, sd_key), run_count(r));
     if (std::isfinite(se)) s += " (SE " + format_se(se) + ")";
     return s;
   });
@@ -144,8 +151,7 @@ Estimate ours_estimate(const json* run, const std::string& prefix) {
   const json& r = run->at("result");
   const json& mean = get(r, prefix + "_mean");
   if (mean.is_number()) e.mean = mean.get<double>();
-  e.se = standard_error(get(r, prefix + "_std"),
-                        get(r, "runs").is_number() ? r["runs"] : get(r, "datasets"));
+  e.se = standard_error(get(r, prefix + "_std"), run_count(r));
   return e;
 }
 

@@ -30,6 +30,8 @@ const json* find_run(const json& results, const std::string& experiment, const R
 bool ok(const json* run);
 /// `j[key]`, or null when `j` is no object or has no such key.
 const json& get(const json& j, const std::string& key);
+/// How many runs a result's means are over: its "runs", or "datasets" for SLAM.
+const json& run_count(const json& result);
 
 // ---- Cells --------------------------------------------------------------------------------------
 
