@@ -83,8 +83,7 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
   const auto ref = control::himmelblau_bridge_reference(pb);
   int below = 0, failed = 0;
   double ess = 0.0, max_gap = 0.0;
-  std::vector<double> cost, adjusted, f19;
-  double mean_f = 0.0;
+  std::vector<double> cost, adjusted, f19, final_f;
   Vec<2> end = Vec<2>::Zero();
   for (const auto& r : runs) {
     below += r.final_f < 10.0 ? 1 : 0;
@@ -92,7 +91,7 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
     cost.push_back(r.cost);
     adjusted.push_back(control::last_step_adjusted_cost(pb, r, ref));
     f19.push_back(control::himmelblau(r.x[static_cast<std::size_t>(K - 1)]));
-    mean_f += r.final_f / s.runs;
+    final_f.push_back(r.final_f);
     ess += r.ess_mean / s.runs;
     max_gap = std::max(max_gap, r.max_laplace_gap);
     end += r.x.back() / s.runs;
@@ -108,6 +107,7 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
   const auto [mean_cost, cost_se] = mean_se(cost);
   const auto [mean_adjusted, adjusted_se] = mean_se(adjusted);
   const auto [mean_f19, f19_se] = mean_se(f19);
+  const auto [mean_f, final_f_se] = mean_se(final_f);
 
   if (!ctx.out_dir.empty()) {
     // The three files are renamed into place together, once all are written.
@@ -159,6 +159,7 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
       {"mean_cost_last_step_adjusted", mean_adjusted},
       {"mean_cost_last_step_adjusted_se", adjusted_se},
       {"mean_final_f", mean_f},
+      {"mean_final_f_se", final_f_se},
       {"mean_f_before_last_step", mean_f19},
       {"mean_f_before_last_step_se", f19_se},
       {"expected",

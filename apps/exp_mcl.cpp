@@ -382,12 +382,15 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   j["error_percent_median"] = median_of(err);
   j["error_percent_runs"] = err;
   j["rmse_m"] = mean_of(rmse);
+  j["rmse_m_std"] = sd_of(rmse);
   j["rmse_m_median"] = median_of(rmse);
   j["max_error_m_median"] = median_of(max_err);
   j["heading_rmse_rad"] = mean_of(hrmse);
   j["ess_mean"] = mean_of(ess);
+  j["ess_std"] = sd_of(ess);
   j["resamplings_mean"] = mean_of(resamplings);
   j["cpu_ms_per_step"] = mean_of(cpu);
+  j["cpu_ms_per_step_std"] = sd_of(cpu);
   j["cpu_ms_per_step_median"] = median_of(cpu);
   j["wall_ms_per_step"] = mean_of(wall);
   j["newton_evaluations_per_update"] = mean_of(newton);

@@ -265,9 +265,38 @@ std::string spread(const nlohmann::json& result, const std::string& prefix, int 
   std::string s = number(mean, digits);
   const auto sd = get(prefix + "_std");
   if (sd.is_number()) s += " ± " + number(sd, digits);
+  std::vector<std::string> notes;
+  const double se = standard_error(sd, get("runs").is_number() ? get("runs") : get("datasets"));
+  if (std::isfinite(se)) notes.push_back("SE " + format_se(se));
   const auto median = get(prefix + "_median");
-  if (median.is_number()) s += " (med " + number(median, digits) + ")";
+  if (median.is_number()) notes.push_back("med " + number(median, digits));
+  for (std::size_t i = 0; i < notes.size(); ++i)
+    s += (i == 0 ? " (" : ", ") + notes[i] + (i + 1 == notes.size() ? ")" : "");
   return s;
+}
+
+double standard_error(const nlohmann::json& sd, const nlohmann::json& n) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!sd.is_number() || !n.is_number()) return nan;
+  const double s = sd.get<double>(), k = n.get<double>();
+  if (!std::isfinite(s) || s < 0.0 || !(k >= 2.0)) return nan;
+  return s / std::sqrt(k);
+}
+
+std::string format_se(double se) {
+  if (!std::isfinite(se) || se < 0.0) return "–";
+  if (se == 0.0) return "0";
+  // Two significant digits: decimals = 1 − floor(log10 se), never negative.
+  const int decimals = std::max(0, 1 - static_cast<int>(std::floor(std::log10(se))));
+  return fmt::format("{:.{}f}", se, decimals);
+}
+
+std::string agreement(const Estimate& ours, const Estimate& reference) {
+  const double combined = std::hypot(ours.se, reference.se);
+  if (!std::isfinite(ours.mean) || !std::isfinite(reference.mean) || !std::isfinite(combined) ||
+      ours.se < 0.0 || reference.se < 0.0 || combined <= 0.0)
+    return "–";
+  return std::abs(ours.mean - reference.mean) <= kAgreementSigmas * combined ? "✓" : "✗";
 }
 
 Table read_csv_table(const std::filesystem::path& file) {

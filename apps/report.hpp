@@ -16,6 +16,7 @@
 // Inline markup in text: `code` and **bold** only.
 
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -64,16 +65,46 @@ std::string html_escape(const std::string& s);
 
 /// "12.3" with `digits` decimals; "–" when the value is missing, null or not a number.
 std::string number(const nlohmann::json& value, int digits);
-/// "mean ± sd (median m)" from three keys of an experiment result (median left out if missing).
+/// "mean ± sd (SE se, med m)" from the keys prefix_mean, prefix_std, prefix_median of an
+/// experiment result; SE = sd/√n with n its "runs" (or "datasets"). Parts whose keys are
+/// missing are left out.
 std::string spread(const nlohmann::json& result, const std::string& prefix, int digits);
+/// sd/√n; NaN when sd is not a finite number ≥ 0 or n < 2 (one run has no standard error).
+double standard_error(const nlohmann::json& sd, const nlohmann::json& n);
+/// A standard error with two significant digits ("0.0022", "0.13", "1.5", "150"), so that a
+/// small SE next to a mean with fewer decimals does not print as 0; "–" when not finite or < 0.
+std::string format_se(double se);
+
+// ---- Agreement --------------------------------------------------------------------------------
+
+/// A mean and its standard error (NaN when unknown; 0 for an exact value).
+struct Estimate {
+  double mean = std::numeric_limits<double>::quiet_NaN();
+  double se = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// How many combined standard errors two estimates of the same quantity may differ by and still
+/// agree. 4.5 keeps false alarms rare over the report's few dozen comparisons (a two-sided
+/// normal tail of 7e-6 each) while a real difference of a few SE over many runs still shows.
+inline constexpr double kAgreementSigmas = 4.5;
+
+/// "✓" when |ours − reference| ≤ kAgreementSigmas √(se_ours² + se_ref²), "✗" otherwise, "–"
+/// when it cannot be computed (a mean or an SE unknown, or both SE 0).
+std::string agreement(const Estimate& ours, const Estimate& reference);
 
 // ---- Reference numbers ------------------------------------------------------------------------
 
-/// The paper's Tables 2, 4, 5, 6 (and the numbers its text quotes), transcribed, plus the
-/// independent reference values of the corrected specification. Stored in results.json under
-/// "paper" and "reference" so that figure scripts can draw them too.
+/// The paper's Tables 2, 4, 5, 6 (and the numbers its text quotes), transcribed, and the
+/// independent reference values of the corrected specification. They are data files,
+/// <share>/data/report/paper.json and reference.json (data/report/README.md says where every
+/// number comes from), stored in results.json under "paper" and "reference" so that the report
+/// and the figure scripts draw them from there. Throw InvalidArgument (file missing) or
+/// ParseError (not JSON, or a required key missing) naming the file.
 nlohmann::json paper_numbers();
 nlohmann::json reference_numbers();
+/// Reads one numbers file: a JSON object with a "source" string and every key of `required`.
+nlohmann::json read_numbers_file(const std::filesystem::path& file,
+                                 const std::vector<std::string>& required);
 
 // ---- The report -------------------------------------------------------------------------------
 

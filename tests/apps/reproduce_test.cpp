@@ -86,6 +86,14 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
   // The paper's numbers are in the report whatever happened to our runs.
   for (const char* paper_value : {"2.64 ± 0.63", "4.46 ± 2.17", "178.34", "2.87", "23.4", "2.98"})
     EXPECT_NE(md.find(paper_value), std::string::npos) << paper_value;
+  // The agreement test is stated once; where the paper cannot be matched (MCL, SLAM) the
+  // comparison with the reference comes before the paper's table.
+  EXPECT_NE(md.find("**Agreement test.**"), std::string::npos);
+  EXPECT_LT(md.find("Against the independent reference implementation (20 seeds)"),
+            md.find("Table 5, implicit MCL"));
+  EXPECT_LT(md.find("Against the independent reference implementation (M = 100"),
+            md.find("Table 6, FastSLAM 1.0"));
+  EXPECT_NE(md.find("(SE "), std::string::npos);
 
   for (const auto& [name, figures] : kFigures) {
     SCOPED_TRACE(name);

@@ -33,7 +33,8 @@ step "install into $prefix"
   cat "$work/install.log"; fail "cmake --install"; }
 for f in include/implicit/core/implicit_sampler.hpp include/implicit/build_info.hpp \
          lib/cmake/implicit/implicitConfig.cmake lib/pkgconfig/implicit.pc \
-         share/implicit/data/carpark/carpark_dr.csv share/implicit/plots/figure1.py; do
+         share/implicit/data/carpark/carpark_dr.csv share/implicit/data/report/paper.json \
+         share/implicit/data/report/reference.json share/implicit/plots/figure1.py; do
   [ -e "$prefix/$f" ] || fail "the install has no $f"
 done
 # Random123 sits in /usr/include on Debian, so a consumer would compile even if the package forgot
