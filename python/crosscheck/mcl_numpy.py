@@ -435,3 +435,124 @@ def check_oracles(data, rng):
         bad.append(f"3.8-3.9 data: {data['all_detections']} detections, {len(data['t'])} steps,"
                    f" {len(used)} scans and {sum(used)} detections used; spec 964, 5000, 505, 961")
     return bad
+
+
+# ---- comparison and command line ---------------------------------------------------------------
+
+def compare(res, ref, n_ref):
+    """Rows (quantity, ours, SE, reference, its SE or None, combined SE) of one cell and method."""
+    n = res["err"].size
+    sd_rmse = res["rmse"].std(ddof=1)
+    lost, ref_lost = res["lost"].sum(), ref["lost_runs"]
+    pooled = (lost + ref_lost) / (n + n_ref)
+    rows = [("err%", res["err"].mean(), res["err"].std(ddof=1) / math.sqrt(n),
+             ref["error_percent_mean"], ref["error_percent_std"] / math.sqrt(n_ref), None),
+            ("RMSE [m]", res["rmse"].mean(), sd_rmse / math.sqrt(n), ref["rmse_m"], None,
+             sd_rmse * math.sqrt(1 / n + 1 / n_ref)),
+            ("lost fraction", lost / n, math.sqrt(lost / n * (1 - lost / n) / n),
+             ref_lost / n_ref, None,
+             math.sqrt(pooled * (1 - pooled) * (1 / n + 1 / n_ref)))]
+    return [(q, a, sa, r, sr, c if c is not None else math.hypot(sa, sr))
+            for q, a, sa, r, sr, c in rows]
+
+
+def read_reference(path):
+    with open(path) as f:
+        t5 = json.load(f)["reference"]["table5"]
+    return {(row["config"], int(row["particles"])): row for row in t5["rows"]}, int(t5["runs"])
+
+
+def parse_cells(text):
+    cells = []
+    for item in text.split(","):
+        config, _, m = item.partition(":")
+        if config not in P_CONFIG or not m.isdigit() or int(m) < 1:
+            raise ValueError(item)
+        cells.append((config, int(m)))
+    return cells
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--runs", type=int, default=10)
+    p.add_argument("--cells", default="A:100,A:300,B:100,B:300",
+                   help="CONFIG:M,... (configs A and B)")
+    p.add_argument("--methods", default="implicit,standard")
+    p.add_argument("--window", type=float, help="filter only the first WINDOW seconds")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--data", type=Path, default=DATA, help="the folder of the Car Park CSV files")
+    p.add_argument("--compare", metavar="RESULTS_JSON")
+    a = p.parse_args()
+    if a.runs < 2:
+        p.error("--runs must be at least 2")
+    try:
+        cells = parse_cells(a.cells)
+    except ValueError as e:
+        p.error(f"--cells: expected CONFIG:M with CONFIG A or B and M >= 1, got {e}")
+    methods = a.methods.split(",")
+    if not set(methods) <= {"implicit", "standard"}:
+        p.error(f"--methods: expected implicit and/or standard, got {a.methods!r}")
+    ref, n_ref = None, 0
+    if a.compare:
+        try:
+            ref, n_ref = read_reference(a.compare)
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            print(f"{a.compare}: cannot read reference.table5: {e}", file=sys.stderr)
+            return 1
+    rng = np.random.default_rng(a.seed)
+    try:
+        data = load(a.data)
+    except (OSError, ValueError, AssertionError) as e:
+        print(f"{a.data}: cannot read the Car Park data: {e}", file=sys.stderr)
+        return 1
+    failures = check_oracles(data, rng)
+    for msg in failures:
+        print(f"oracle check failed: {msg}", file=sys.stderr)
+    if failures:
+        return 1
+    print("oracles of spec §3.1, §3.7 (Case B) and the data counts of §3.8-3.9: ok")
+    steps = len(data["t"])
+    if a.window is not None:
+        steps = int(np.searchsorted(data["t"], T0 + a.window, side="right"))
+        if steps < 1:
+            p.error("--window: no motion step inside the window")
+    span = data["t"][steps - 1] - T0
+    bad = compared = 0
+    print(f"{'cell':<7} {'method':<9} {'quantity':<14} {'numpy':>17} {'reference':>17} "
+          f"{'z':>6}  check")
+    for config, m in cells:
+        for method in methods:
+            res = run_cell(data, config, m, a.runs, method, rng, steps)
+            row = None
+            if ref is not None and a.window is None:
+                row = ref.get((config, m))
+            cell = f"{config}:{m}"
+            lines = compare(res, row[method], n_ref) if row else [
+                (q, v.mean(), v.std(ddof=1) / math.sqrt(v.size), None, None, None)
+                for q, v in (("err%", res["err"]), ("RMSE [m]", res["rmse"]),
+                             ("lost fraction", res["lost"]))]
+            for q, ours, se, rv, rse, comb in lines:
+                ref_txt, z_txt, verdict = "", "", ""
+                if rv is not None:
+                    compared += 1
+                    ok = abs(ours - rv) <= 4.5 * comb
+                    bad += not ok
+                    z_txt = f"{(ours - rv) / comb:+.2f}" if comb > 0 else "0"
+                    ref_txt = f"{rv:.4g}" + (f" ± {rse:.3g}" if rse is not None else "")
+                    verdict = "ok" if ok else "DISAGREES"
+                print(f"{cell:<7} {method:<9} {q:<14} {ours:>8.4g} ± {se:<6.3g} {ref_txt:>17} "
+                      f"{z_txt:>6}  {verdict}")
+            print(f"{cell:<7} {method:<9} {'ESS/M':<14} {res['ess'].mean():>8.3g}"
+                  + (f"   Newton iterations per particle and scan {res['newton']:.2f}"
+                     if method == "implicit" else ""))
+    print(f"{a.runs} runs per cell, seed {a.seed}, {steps} steps ({span:.1f} s)")
+    if a.compare:
+        note = " (a window: the reference covers the whole run)" if a.window is not None else ""
+        print(f"{compared} quantities compared with the reference, {bad} disagree{note}")
+    if bad:
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
