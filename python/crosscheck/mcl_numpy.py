@@ -33,9 +33,10 @@ compared with the pooled proportion of the two-sample binomial test. ESS/M is pr
 compared (no spread is stored for it).
 
 Reduced size: the reference has 20 seeds at M = 100, 300, 1000 (A) and 100, 300 (B). The
-default here is 10 runs of the cells A:300 and B:100 (both methods), which takes a few minutes;
-every cell and --runs 20 take about half an hour. --window T filters only the first T seconds
-(a smoke test); the reference covers the whole 125 s, so --compare then compares nothing.
+default (and `make crosscheck`) is 10 runs of A:100, A:300, B:100 and B:300 with both methods:
+about 100 s of CPU time (6 min wall on 2 busy cores, docs/reproducing.md). Every cell with
+--runs 20 needs about five times as much. --window T filters only the first T seconds (the
+smoke test); the reference covers the whole 125 s, so --compare then compares nothing.
 """
 import argparse
 import json
