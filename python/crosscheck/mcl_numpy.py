@@ -35,7 +35,7 @@ compared (no spread is stored for it).
 Reduced size: the reference has 20 seeds at M = 100, 300, 1000 (A) and 100, 300 (B). The
 default (and `make crosscheck`) is 10 runs of A:100, A:300, B:100 and B:300 with both methods:
 about 100 s of CPU time (6 min wall on 2 busy cores, docs/reproducing.md). Every cell with
---runs 20 needs about five times as much. --window T filters only the first T seconds (the
+--runs 20 needs about four times as much. --window T filters only the first T seconds (the
 smoke test); the reference covers the whole 125 s, so --compare then compares nothing.
 """
 import argparse
