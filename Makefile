@@ -79,7 +79,8 @@ reproduce-quick: build
 
 # The independent numpy implementations (python/crosscheck/) against the reference numbers the
 # report uses: they read them from a results.json of `implicit reproduce` (here a quick Himmelblau
-# run, which also carries Table 4's closed-form expectations). Sizes: docs/reproducing.md.
+# run, which also carries Table 4's closed-form expectations; every results.json carries the
+# reference numbers, Table 5's among them). Sizes: docs/reproducing.md.
 CROSSCHECK_OUT ?= $(BUILD_DIR)/crosscheck
 crosscheck: build
 	@$(BUILD_DIR)/apps/implicit reproduce --quick --only himmelblau --no-figures \
@@ -90,6 +91,9 @@ crosscheck: build
 	@echo "== Himmelblau (Table 4), 400 runs =="
 	@/usr/bin/python3 python/crosscheck/himmelblau_numpy.py --runs 400 --seed 1 \
 	  --compare $(CROSSCHECK_OUT)/results.json
+	@echo "== Car Park MCL (Table 5), 10 runs of A:100, A:300, B:100, B:300 =="
+	@/usr/bin/python3 python/crosscheck/mcl_numpy.py --runs 10 --cells A:100,A:300,B:100,B:300 \
+	  --seed 1 --compare $(CROSSCHECK_OUT)/results.json
 
 bench: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS) --target benchmarks
