@@ -212,6 +212,11 @@ void mcl_section(Document& doc, const json& results, const Numbers& numbers) {
       "err% there is what this model gives with that few particles, not a broken filter, as "
       "long as the agreement column shows ✓.");
   doc.table(mcl_reference_table(results, ref));
+  doc.paragraph(
+      "The reference is the mean over its seeds of an independent numpy implementation of "
+      "spec §3.9 that shares no code with the library: python/crosscheck/mcl_numpy.py reruns it, "
+      "and `make crosscheck` compares it with these numbers at reduced size (docs/reproducing.md, "
+      "\"Where the reference columns come from\").");
   const auto& converged = ref["converged_error_percent_A"];
   doc.paragraph(fmt::format(
       "Converged err% (M = 10^4, implicit) in the reference: {}–{} % in config A, {} % in "
