@@ -104,8 +104,7 @@ void read_detections(const py::object& detections, std::vector<LabelledMeasureme
   }
 }
 
-void bind_particle_filter(py::module_& m) {
-  py::class_<PyFilter>(m, "ParticleFilter", R"doc(
+constexpr const char* kParticleFilterDoc = R"doc(
 Monte Carlo localization with a known landmark map (spec §3.8), stepped from Python.
 
 ParticleFilter(model, sensor, landmarks, proposal="implicit", particles=100, seed=1,
@@ -141,7 +140,10 @@ Example::
     pf.initialize(steps.initial_mean, steps.initial_covariance)
     for u, dt, z in zip(steps.controls, steps.dt, steps.detections):
         pf.step(u, dt, z)
-    print(pf.mean()))doc")
+    print(pf.mean()))doc";
+
+void bind_particle_filter(py::module_& m) {
+  py::class_<PyFilter>(m, "ParticleFilter", kParticleFilterDoc)
       .def(py::init([](const py::object& model, const robot::RangeBearingSensor& sensor,
                        const py::object& landmarks, const std::string& proposal,
                        std::size_t particles, std::uint64_t seed, const std::string& map,
@@ -182,7 +184,8 @@ Example::
             p.f->initialize(Pose(a.data()[0], a.data()[1], a.data()[2]), cm);
             p.initialized = true;
           },
-          py::arg("mean"), py::arg("covariance"))
+          py::arg("mean"), py::arg("covariance"),
+          "Draws the particles from N(mean (3,), covariance (3, 3)) with equal weights.")
       .def(
           "step",
           [](PyFilter& p, const py::object& control, double dt, const py::object& detections) {
@@ -200,7 +203,9 @@ Example::
               p.f->step(c, p.z);
             }
           },
-          py::arg("control"), py::arg("dt") = 0.0, py::arg("detections") = py::none())
+          py::arg("control"), py::arg("dt") = 0.0, py::arg("detections") = py::none(),
+          "One motion step with control (2,) over dt [s] (0: the previous length), then the "
+          "update with detections (k, 3) [landmark index, range m, bearing rad] (None: predict).")
       .def_property_readonly("particles",
                              [](py::object self) {
                                const auto s = self.cast<PyFilter&>().f->particles();
@@ -234,8 +239,7 @@ struct PySlam {
   std::uint64_t n = 0;
 };
 
-void bind_slam_filter(py::module_& m) {
-  py::class_<PySlam>(m, "Filter", R"doc(
+constexpr const char* kSlamFilterDoc = R"doc(
 Online landmark SLAM (spec §3.5, paper §4.2), stepped from Python.
 
 Filter(method="implicit-rb", particles=100, seed=1, model=None, sensor=RangeBearing(),
@@ -252,7 +256,10 @@ Args:
 
 step(control (2,), dt [s], detections (k, 3) [landmark, range m, bearing rad] or None);
 mean() (3,), covariance() (3, 3); map() returns (positions (K, 2), ids (K,)); ess the mean
-ESS / M over the weighted steps so far.)doc")
+ESS / M over the weighted steps so far.)doc";
+
+void bind_slam_filter(py::module_& m) {
+  py::class_<PySlam>(m, "Filter", kSlamFilterDoc)
       .def(py::init([](const std::string& method, int particles, std::uint64_t seed,
                        const py::object& model, const robot::RangeBearingSensor& sensor,
                        const std::string& association, const py::object& initial_pose) {
@@ -289,7 +296,9 @@ ESS / M over the weighted steps so far.)doc")
             if (dt != 0) p.f->set_step_length(dt);
             p.f->step(++p.n, c, p.z);
           },
-          py::arg("control"), py::arg("dt") = 0.0, py::arg("detections") = py::none())
+          py::arg("control"), py::arg("dt") = 0.0, py::arg("detections") = py::none(),
+          "One motion step with control (2,) over dt [s] (0: the previous length), then the "
+          "detections (k, 3) [landmark, range m, bearing rad] (None: predict only).")
       .def("mean",
            [](const PySlam& p) {
              const Pose x = p.f->pose().mean;
