@@ -201,6 +201,13 @@ Example::
       .def("__len__", [](const filter::LocalizationProblem& p) { return p.schedule.steps.size(); });
 }
 
+/// The model argument must be one of the two motion models (a clear error, not a cast failure).
+void require_model(const py::object& model, const char* where) {
+  require(py::isinstance<robot::UteModel>(model) || py::isinstance<robot::UnicycleModel>(model),
+          "{}: model: expected implicit.models.Ute or implicit.models.Unicycle, got {}", where,
+          std::string(py::str(py::type::handle_of(model).attr("__name__"))));
+}
+
 template <typename Model>
 robot::RobotLog simulate_with(const Model& model, const robot::RangeBearingSensor& sensor,
                               const robot::SimulationOptions& o, double speed, bool unicycle,
@@ -238,6 +245,7 @@ void init_data(py::module_& m) {
   m.def(
       "steps",
       [](const robot::RobotLog& log, const py::object& model) {
+        require_model(model, "steps");
         const double dt = py::isinstance<robot::UnicycleModel>(model)
                               ? model.cast<const robot::UnicycleModel&>().dt()
                               : model.cast<const robot::UteModel&>().dt();
@@ -249,6 +257,7 @@ void init_data(py::module_& m) {
       "simulate",
       [](const py::object& model, const robot::RangeBearingSensor& sensor, int steps, int landmarks,
          int scan_every, double max_range, const py::object& speed, std::uint64_t seed) {
+        require_model(model, "simulate");
         robot::SimulationOptions o;
         o.steps = steps;
         o.landmarks = landmarks;

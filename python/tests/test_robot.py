@@ -102,6 +102,8 @@ def test_data_sets_and_logs(tmp_path):
     assert back.controls.shape == sim.controls.shape
     with pytest.raises(ValueError):
         implicit.data.read_log(str(tmp_path / "missing.log"))
+    with pytest.raises(ValueError, match="steps: model: expected implicit.models.Ute or"):
+        implicit.data.steps(log, implicit.models.RangeBearing())
     vp = implicit.data.victoria_park()
     assert vp.controls.shape[0] > 1000
 
