@@ -7,7 +7,7 @@ packages=(
   build-essential cmake
   libeigen3-dev libtbb-dev libcli11-dev nlohmann-json3-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev librandom123-dev pybind11-dev
-  python3 python3-dev python3-numpy python3-matplotlib zlib1g-dev
+  python3 python3-dev python3-numpy python3-matplotlib python3-pytest zlib1g-dev
   clang-14 libclang-rt-14-dev  # make test-sanitize, make fuzz-smoke: clang++ 14, ASan, UBSan, libFuzzer
   libopenmpi-dev openmpi-bin  # the MPI build (docs/cluster.md)
   pkgconf doxygen

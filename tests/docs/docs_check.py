@@ -14,7 +14,7 @@ The conventions for authors are in docs/design.md, "Tested documentation":
   ```cpp fragment               a piece of a program: not compiled
   ```output                     what the program just above prints, compared exactly
   ```output tolerance=1e-3      ... every number within 1e-3 * max(1, |expected|), text exactly
-The same holds for ```python blocks (run with the built Python module on PYTHONPATH), and a
+The same holds for ```python blocks (run with the built package, PYTHONPATH=build/python), and a
 ```robot-log block (docs/formats.md) is run through `implicit mcl --data` and must be scored.
 """
 import argparse

@@ -2,7 +2,8 @@
 # Installs the build into a scratch prefix P and uses it from outside the source tree:
 #  1. find_package(implicit): builds and runs README.md's library example, extracted from README.md;
 #  2. pkg-config: compiles and runs a consumer with `pkg-config --cflags --libs implicit`;
-#  3. Python: imports the module from P with the documented PYTHONPATH;
+#  3. Python: imports the package from P with the documented PYTHONPATH and checks that
+#     implicit.mcl.run gives the installed CLI's numbers (the README's acceptance command);
 #  4. the CLI: P/bin/implicit --version, an MCL run on the installed data, and the error when
 #     the data folder cannot be found.
 # Fails (exit 1) with the step's name and output on the first step that does not work.
@@ -76,12 +77,22 @@ c++ -O1 -o "$work/pkgconfig_consumer" "$here/pkgconfig_consumer.cpp" $flags ||
   fail "pkg-config consumer build"
 "$work/pkgconfig_consumer" || fail "pkg-config consumer run (log Z differs from the exact value)"
 
-# 3. The Python module, imported from the prefix only.
+# 3. The Python package, imported from the prefix only (its data found from there too).
 if [ -n "$python" ]; then
-  step "Python module from PYTHONPATH=$prefix/$python_dir"
-  (cd "$work" && PYTHONPATH="$prefix/$python_dir" "$python" -c \
-    'import implicit_py, os, sys; p = implicit_py.__file__; print("  imported", p); sys.exit(0 if p.startswith(sys.argv[1]) else 1)' \
-    "$prefix/") || fail "import implicit_py from the prefix"
+  step "Python package from PYTHONPATH=$prefix/$python_dir"
+  (cd "$work" && unset IMPLICIT_DATA_DIR && PYTHONPATH="$prefix/$python_dir" "$python" -c \
+    'import implicit, os, sys; p = implicit.__file__; print("  imported", p); sys.exit(0 if p.startswith(sys.argv[1]) and implicit._implicit.__file__.startswith(sys.argv[1]) else 1)' \
+    "$prefix/") || fail "import implicit from the prefix"
+  if [ "$cli" = 1 ]; then
+    step "implicit.mcl.run equals implicit mcl --json"
+    py_rmse="$(cd "$work" && unset IMPLICIT_DATA_DIR && PYTHONPATH="$prefix/$python_dir" "$python" -c \
+      "import implicit; r = implicit.mcl.run(method='implicit', particles=100, runs=2, seed=1); print(repr(r['rmse_m']))")" ||
+      fail "implicit.mcl.run from the prefix"
+    cli_rmse="$(cd "$work" && unset IMPLICIT_DATA_DIR && "$prefix/bin/implicit" mcl --method implicit -M 100 --runs 2 --seed 1 --json |
+      "$python" -c 'import json, sys; print(repr(json.load(sys.stdin)["rmse_m"]))')" || fail "implicit mcl --json"
+    echo "  python $py_rmse, CLI $cli_rmse"
+    [ "$py_rmse" = "$cli_rmse" ] || fail "implicit.mcl.run rmse_m $py_rmse differs from the CLI's $cli_rmse"
+  fi
 fi
 
 # 4. The installed CLI, run from a folder outside the source tree with no data variables set.

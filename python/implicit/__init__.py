@@ -1,0 +1,47 @@
+"""implicit: implicit sampling for Monte Carlo localization, SLAM and path integral control.
+
+The package wraps the C++ library of the same name. Arrays go in and come out as numpy float64
+arrays; large results (samples, weights, particles) are handed over without copies.
+
+Core (spec §1):
+    sample(F, x0, n, ...)       weighted samples of exp(-F) by implicit sampling
+    resample(weights, ...)      multinomial, systematic, stratified or residual ancestors
+    ess(weights), log_sum_exp(a)
+
+Robotics (spec §3): implicit.models (Ute, Unicycle, RangeBearing), implicit.data (carpark(),
+victoria_park(), read_log(), simulate(), steps()), ParticleFilter, implicit.slam (Filter, run),
+implicit.mcl.run. Control (spec §2): implicit.control.
+
+Errors are raised as implicit.InvalidArgument (a ValueError) with the library's message.
+
+Example::
+
+    import numpy as np, implicit
+    r = implicit.sample(lambda x: 0.5 * x @ x, x0=np.zeros(2), n=1000, seed=1)
+    r.samples.shape, r.weights.sum(), r.log_Z   # (1000, 2), 1.0, log(2 pi)
+"""
+from . import _paths
+
+_paths.configure()
+
+from ._core import SampleResult, ess, log_sum_exp, resample, sample  # noqa: E402
+from ._implicit import InvalidArgument, ParseError, __version__  # noqa: E402
+from ._implicit import ParticleFilter  # noqa: E402
+from . import control, data, mcl, models, slam  # noqa: E402
+
+__all__ = [
+    "InvalidArgument",
+    "ParseError",
+    "ParticleFilter",
+    "SampleResult",
+    "__version__",
+    "control",
+    "data",
+    "ess",
+    "log_sum_exp",
+    "mcl",
+    "models",
+    "resample",
+    "sample",
+    "slam",
+]

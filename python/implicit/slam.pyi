@@ -1,0 +1,27 @@
+from typing import Any, Optional, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from .models import RangeBearing, Unicycle, Ute
+
+class Filter:
+    def __init__(self, method: str = "implicit-rb", particles: int = 100, seed: int = 1,
+                 model: Optional[Union[Ute, Unicycle]] = None,
+                 sensor: RangeBearing = ..., association: str = "known",
+                 initial_pose: npt.ArrayLike = ...) -> None: ...
+    def step(self, control: npt.ArrayLike, dt: float = 0.0,
+             detections: Optional[npt.ArrayLike] = None) -> None: ...
+    def mean(self) -> np.ndarray: ...
+    def covariance(self) -> np.ndarray: ...
+    def map(self) -> tuple[np.ndarray, np.ndarray]: ...
+    @property
+    def ess(self) -> float: ...
+
+def run(method: str = "implicit", particles: int = 100, datasets: int = 50, seed: int = 1,
+        data: Optional[str] = None, association: str = "known", truth: str = "paper",
+        laser_every: int = 1, control_noise: float = 0.5, min_range: float = 0.0,
+        range_sd: float = 0.0, bearing_sd: float = 0.0, gate_chi2: float = 0.0,
+        new_landmark_density: float = 0.0, model: Optional[str] = None,
+        control_sd: Optional[list[float]] = None, state_sd: Optional[list[float]] = None,
+        out: Optional[str] = None, threads: int = 0) -> dict[str, Any]: ...

@@ -1,0 +1,48 @@
+#pragma once
+// Shared helpers of the Python extension: numpy arrays that own C++ buffers without copying
+// them, and the argument checks that turn bad shapes into InvalidArgument (ValueError).
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "implicit/core/error.hpp"
+
+namespace implicit::python {
+
+namespace py = pybind11;
+
+/// A numpy array over the buffer of `owner`, which is moved to the heap and freed with the array:
+/// large results (samples, weights) reach Python without a copy.
+/// Owner: std::vector<double> or a dynamic Eigen matrix (heap storage, data() after the move).
+template <typename Owner>
+py::array_t<double> adopt(Owner&& owner, std::vector<py::ssize_t> shape) {
+  auto* kept = new Owner(std::move(owner));
+  const double* p = kept->data();
+  py::capsule free_it(kept, [](void* o) { delete static_cast<Owner*>(o); });
+  std::vector<py::ssize_t> strides(shape.size());
+  py::ssize_t step = sizeof(double);
+  for (std::size_t k = shape.size(); k-- > 0;) {
+    strides[k] = step;
+    step *= shape[k];
+  }
+  return py::array_t<double>(shape, strides, p, free_it);
+}
+
+inline py::array_t<double> adopt_vector(std::vector<double>&& v) {
+  const auto n = static_cast<py::ssize_t>(v.size());
+  return adopt(std::move(v), {n});
+}
+
+/// A read-only float64 array of the given shape; -1 in `shape` accepts any length. The message
+/// names the argument and both shapes.
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+Array require_shape(const py::handle& object, const std::string& name,
+                    std::vector<py::ssize_t> shape, bool finite = true);
+
+std::string shape_text(const py::array& a);
+
+}  // namespace implicit::python

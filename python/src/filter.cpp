@@ -1,0 +1,333 @@
+// implicit.ParticleFilter (localization) and implicit.slam.Filter: filters stepped from Python.
+// Each step releases the GIL and runs the C++ engine (particles in parallel); particles and
+// weights are read-only numpy views of the engine's buffers.
+
+#include <pybind11/stl.h>
+
+#include <memory>
+
+#include "common.hpp"
+#include "implicit/filter/particle_filter.hpp"
+#include "implicit/slam/slam_filter.hpp"
+#include "robot.hpp"
+
+namespace implicit::python {
+namespace {
+
+using filter::LabelledMeasurement;
+using filter::StepSummary;
+using robot::Control;
+using robot::Measurement;
+using robot::Pose;
+
+/// The filter behind the Python class, whatever its motion model and proposal.
+class AnyFilter {
+ public:
+  virtual ~AnyFilter() = default;
+  virtual void initialize(const Pose& mean, const Mat<3>& cov) = 0;
+  virtual void set_step_length(double dt) = 0;
+  virtual const StepSummary& step(const Control& u, std::span<const LabelledMeasurement> z) = 0;
+  virtual std::span<const Pose> particles() const = 0;
+  virtual std::span<const double> weights() const = 0;
+  virtual const StepSummary& last() const = 0;
+};
+
+template <typename Motion, typename Proposal>
+class FilterOf final : public AnyFilter {
+ public:
+  FilterOf(Motion m, robot::RangeBearingSensor s, robot::LandmarkMap map, Proposal p,
+           filter::FilterOptions o)
+      : pf_(std::move(m), std::move(s), std::move(map), std::move(p), o) {}
+  void initialize(const Pose& mean, const Mat<3>& cov) override { pf_.initialize(mean, cov); }
+  void set_step_length(double dt) override { pf_.set_step_length(dt); }
+  const StepSummary& step(const Control& u, std::span<const LabelledMeasurement> z) override {
+    return pf_.step(u, z);
+  }
+  std::span<const Pose> particles() const override { return pf_.particles(); }
+  std::span<const double> weights() const override { return pf_.weights(); }
+  const StepSummary& last() const override { return pf_.last(); }
+
+ private:
+  filter::ParticleFilter<Motion, robot::RangeBearingSensor, Proposal> pf_;
+};
+
+template <typename Motion>
+std::unique_ptr<AnyFilter> make_filter(const Motion& m, const robot::RangeBearingSensor& s,
+                                       robot::LandmarkMap map, const std::string& proposal,
+                                       const std::string& map_kind,
+                                       const filter::FilterOptions& o) {
+  if (proposal == "bootstrap" || proposal == "standard")
+    return std::make_unique<FilterOf<Motion, filter::BootstrapProposal>>(
+        m, s, std::move(map), filter::BootstrapProposal{}, o);
+  require(proposal == "implicit",
+          "ParticleFilter: proposal: expected 'implicit' or 'bootstrap', got '{}'", proposal);
+  require(map_kind == "linear" || map_kind == "random",
+          "ParticleFilter: map: expected 'linear' or 'random', got '{}'", map_kind);
+  filter::ImplicitProposal p;
+  p.map = map_kind == "random" ? filter::ImplicitMap::kRandom : filter::ImplicitMap::kLinear;
+  return std::make_unique<FilterOf<Motion, filter::ImplicitProposal>>(m, s, std::move(map), p, o);
+}
+
+/// The Python object: the filter, the detections buffer reused across steps, the step count.
+struct PyFilter {
+  std::unique_ptr<AnyFilter> f;
+  std::vector<LabelledMeasurement> z;
+  std::size_t landmarks = 0;
+  bool initialized = false;
+};
+
+py::dict summary(const StepSummary& s) {
+  py::dict d;
+  d["step"] = s.step;
+  d["mean"] = py::array_t<double>(3, s.mean.data());
+  d["covariance"] = py::array_t<double>({3, 3}, s.covariance.data());  // symmetric
+  d["ess"] = s.ess;
+  d["resampled"] = s.resampled;
+  d["updated"] = s.updated;
+  d["log_likelihood_increment"] = s.log_likelihood_increment;
+  d["detections_used"] = s.detections_used;
+  d["detections_dropped"] = s.detections_dropped;
+  d["failures"] = s.failures;
+  return d;
+}
+
+void read_detections(const py::object& detections, std::vector<LabelledMeasurement>& z) {
+  z.clear();
+  if (detections.is_none()) return;
+  const Array a = require_shape(detections, "detections", {-1, 3});
+  for (py::ssize_t k = 0; k < a.shape(0); ++k) {
+    const double id = a.at(k, 0);
+    require(id == std::floor(id) && id >= -1,
+            "detections: expected a landmark index (integer >= -1) in column 0, got {} in row {}",
+            id, k);
+    z.push_back({Measurement(a.at(k, 1), a.at(k, 2)), static_cast<int>(id)});
+  }
+}
+
+constexpr const char* kParticleFilterDoc = R"doc(
+Monte Carlo localization with a known landmark map (spec §3.8), stepped from Python.
+
+ParticleFilter(model, sensor, landmarks, proposal="implicit", particles=100, seed=1,
+               map="linear", resample_threshold=0.5, resampling="systematic", clutter=True)
+
+Args:
+    model: implicit.models.Ute or implicit.models.Unicycle.
+    sensor: implicit.models.RangeBearing.
+    landmarks: (K, 2) landmark positions [m]; detections name them by row index.
+    proposal: "implicit" (implicit sampling per particle) or "bootstrap" (the motion model).
+    particles: M.
+    seed: particle j at step n draws from the stream (seed, n, j): results do not depend on
+        the number of threads, and equal those of `implicit mcl` run r with seed * runs + r.
+    map: the implicit proposal's map, "linear" or "random".
+    resample_threshold: resample when ESS < threshold * M.
+    resampling: "multinomial", "systematic", "stratified" or "residual".
+    clutter: detections outside the gate contribute the clutter density.
+
+Use: initialize(mean (3,), covariance (3, 3)), then step(control (2,), dt [s], detections) per
+motion step, with detections an (k, 3) array of [landmark index, range m, bearing rad] (None or
+k = 0: predict only); dt = 0 keeps the previous step length (initially the model's dt).
+
+particles (M, 3) and weights (M,) are read-only views of the filter's buffers, valid until the
+next step (copy them to keep them). mean() and covariance() are the weighted pose mean (heading:
+circular mean) and covariance; ess the effective sample size of the last update; last a dict
+summary of the last step.
+
+Example::
+
+    steps = implicit.data.steps(implicit.data.carpark(), implicit.models.Ute())
+    pf = implicit.ParticleFilter(implicit.models.Ute(), implicit.models.RangeBearing(),
+                                 steps.landmarks, particles=100, seed=1)
+    pf.initialize(steps.initial_mean, steps.initial_covariance)
+    for u, dt, z in zip(steps.controls, steps.dt, steps.detections):
+        pf.step(u, dt, z)
+    print(pf.mean()))doc";
+
+void bind_particle_filter(py::module_& m) {
+  py::class_<PyFilter>(m, "ParticleFilter", kParticleFilterDoc)
+      .def(py::init([](const py::object& model, const robot::RangeBearingSensor& sensor,
+                       const py::object& landmarks, const std::string& proposal,
+                       std::size_t particles, std::uint64_t seed, const std::string& map,
+                       double resample_threshold, const std::string& resampling, bool clutter) {
+             filter::FilterOptions o;
+             o.particles = particles;
+             o.seed = seed;
+             o.resample_threshold = resample_threshold;
+             o.resampling = parse_resampling_scheme(resampling);
+             o.association.clutter = clutter;
+             robot::LandmarkMap lm = landmark_map(landmarks);
+             PyFilter p;
+             p.landmarks = lm.size();
+             if (py::isinstance<robot::UnicycleModel>(model))
+               p.f = make_filter(model.cast<const robot::UnicycleModel&>(), sensor, std::move(lm),
+                                 proposal, map, o);
+             else if (py::isinstance<robot::UteModel>(model))
+               p.f = make_filter(model.cast<const robot::UteModel&>(), sensor, std::move(lm),
+                                 proposal, map, o);
+             else
+               throw InvalidArgument(fmt::format(
+                   "ParticleFilter: model: expected implicit.models.Ute or Unicycle, got {}",
+                   std::string(py::str(py::type::handle_of(model).attr("__name__")))));
+             return p;
+           }),
+           py::arg("model"), py::arg("sensor"), py::arg("landmarks"),
+           py::arg("proposal") = "implicit", py::arg("particles") = 100, py::arg("seed") = 1,
+           py::arg("map") = "linear", py::arg("resample_threshold") = 0.5,
+           py::arg("resampling") = "systematic", py::arg("clutter") = true)
+      .def(
+          "initialize",
+          [](PyFilter& p, const py::object& mean, const py::object& cov) {
+            const Array a = require_shape(mean, "mean", {3});
+            const Array c = require_shape(cov, "covariance", {3, 3});
+            Mat<3> cm;
+            for (int i = 0; i < 3; ++i)
+              for (int j = 0; j < 3; ++j) cm(i, j) = c.at(i, j);
+            p.f->initialize(Pose(a.data()[0], a.data()[1], a.data()[2]), cm);
+            p.initialized = true;
+          },
+          py::arg("mean"), py::arg("covariance"),
+          "Draws the particles from N(mean (3,), covariance (3, 3)) with equal weights.")
+      .def(
+          "step",
+          [](PyFilter& p, const py::object& control, double dt, const py::object& detections) {
+            require(p.initialized, "ParticleFilter.step: call initialize(mean, covariance) first");
+            const Array u = require_shape(control, "control", {2});
+            read_detections(detections, p.z);
+            for (const auto& z : p.z)
+              require(z.landmark < static_cast<int>(p.landmarks),
+                      "detections: expected landmark indices below {}, got {}", p.landmarks,
+                      z.landmark);
+            const Control c(u.data()[0], u.data()[1]);
+            {
+              py::gil_scoped_release unlocked;
+              if (dt != 0) p.f->set_step_length(dt);
+              p.f->step(c, p.z);
+            }
+          },
+          py::arg("control"), py::arg("dt") = 0.0, py::arg("detections") = py::none(),
+          "One motion step with control (2,) over dt [s] (0: the previous length), then the "
+          "update with detections (k, 3) [landmark index, range m, bearing rad] (None: predict).")
+      .def_property_readonly("particles",
+                             [](py::object self) {
+                               const auto s = self.cast<PyFilter&>().f->particles();
+                               py::array_t<double> a(
+                                   {static_cast<py::ssize_t>(s.size()), py::ssize_t{3}},
+                                   s.data()->data(), self);
+                               a.attr("flags").attr("writeable") = false;
+                               return a;
+                             })
+      .def_property_readonly("weights",
+                             [](py::object self) {
+                               const auto w = self.cast<PyFilter&>().f->weights();
+                               py::array_t<double> a(static_cast<py::ssize_t>(w.size()), w.data(),
+                                                     self);
+                               a.attr("flags").attr("writeable") = false;
+                               return a;
+                             })
+      .def("mean",
+           [](const PyFilter& p) { return py::array_t<double>(3, p.f->last().mean.data()); })
+      .def("covariance",
+           [](const PyFilter& p) {
+             return py::array_t<double>({3, 3}, p.f->last().covariance.data());
+           })
+      .def_property_readonly("ess", [](const PyFilter& p) { return p.f->last().ess; })
+      .def_property_readonly("last", [](const PyFilter& p) { return summary(p.f->last()); });
+}
+
+struct PySlam {
+  std::unique_ptr<slam::SlamFilter> f;
+  std::vector<slam::Observation> z;
+  std::uint64_t n = 0;
+};
+
+constexpr const char* kSlamFilterDoc = R"doc(
+Online landmark SLAM (spec §3.5, paper §4.2), stepped from Python.
+
+Filter(method="implicit-rb", particles=100, seed=1, model=None, sensor=RangeBearing(),
+       association="known", initial_pose=(0, 0, 0))
+
+Args:
+    method: "ekf", "fastslam1", "fastslam2", "implicit" or "implicit-rb".
+    particles: M (ignored by "ekf").
+    seed: filter randomness (seed, step, particle).
+    model: implicit.models.Ute (default: the Car Park Ute) or implicit.models.Unicycle.
+    sensor: implicit.models.RangeBearing (Sigma2).
+    association: "known" (column 0 of the detections identifies the landmark) or "ml".
+    initial_pose: (3,) the known start pose.
+
+step(control (2,), dt [s], detections (k, 3) [landmark, range m, bearing rad] or None);
+mean() (3,), covariance() (3, 3); map() returns (positions (K, 2), ids (K,)); ess the mean
+ESS / M over the weighted steps so far.)doc";
+
+void bind_slam_filter(py::module_& m) {
+  py::class_<PySlam>(m, "Filter", kSlamFilterDoc)
+      .def(py::init([](const std::string& method, int particles, std::uint64_t seed,
+                       const py::object& model, const robot::RangeBearingSensor& sensor,
+                       const std::string& association, const py::object& initial_pose) {
+             slam::SlamOptions o;
+             o.method = slam::parse_slam_method(method);
+             o.association = slam::parse_association(association);
+             o.particles = particles;
+             o.seed = seed;
+             o.sensor = sensor;
+             if (py::isinstance<robot::UnicycleModel>(model))
+               o.model = robot::AnyMotionModel(model.cast<const robot::UnicycleModel&>());
+             else if (!model.is_none())
+               o.motion = model.cast<const robot::UteModel&>().params();
+             o.validate();
+             const Array x0 = require_shape(initial_pose, "initial_pose", {3});
+             PySlam p;
+             p.f = slam::make_slam_filter(o, Pose(x0.data()[0], x0.data()[1], x0.data()[2]));
+             return p;
+           }),
+           py::arg("method") = "implicit-rb", py::arg("particles") = 100, py::arg("seed") = 1,
+           py::arg("model") = py::none(), py::arg("sensor") = robot::RangeBearingSensor(),
+           py::arg("association") = "known",
+           py::arg("initial_pose") = py::array_t<double>(3, Pose::Zero().eval().data()))
+      .def(
+          "step",
+          [](PySlam& p, const py::object& control, double dt, const py::object& detections) {
+            const Array u = require_shape(control, "control", {2});
+            std::vector<LabelledMeasurement> z;
+            read_detections(detections, z);
+            p.z.clear();
+            for (const auto& d : z) p.z.push_back({d.z, d.landmark});
+            const Control c(u.data()[0], u.data()[1]);
+            py::gil_scoped_release unlocked;
+            if (dt != 0) p.f->set_step_length(dt);
+            p.f->step(++p.n, c, p.z);
+          },
+          py::arg("control"), py::arg("dt") = 0.0, py::arg("detections") = py::none(),
+          "One motion step with control (2,) over dt [s] (0: the previous length), then the "
+          "detections (k, 3) [landmark, range m, bearing rad] (None: predict only).")
+      .def("mean",
+           [](const PySlam& p) {
+             const Pose x = p.f->pose().mean;
+             return py::array_t<double>(3, x.data());
+           })
+      .def("covariance",
+           [](const PySlam& p) {
+             const Mat<3> c = p.f->pose().cov;
+             return py::array_t<double>({3, 3}, c.data());
+           })
+      .def(
+          "map",
+          [](const PySlam& p) {
+            const slam::MapEstimate e = p.f->map();
+            py::array_t<int> ids(static_cast<py::ssize_t>(e.ids.size()), e.ids.data());
+            py::array_t<double> pos({static_cast<py::ssize_t>(e.landmarks.size()), py::ssize_t{2}});
+            for (std::size_t k = 0; k < e.landmarks.size(); ++k) {
+              pos.mutable_at(k, 0) = e.landmarks[k](0);
+              pos.mutable_at(k, 1) = e.landmarks[k](1);
+            }
+            return py::make_tuple(pos, ids);
+          })
+      .def_property_readonly("ess",
+                             [](const PySlam& p) { return p.f->stats().mean_ess_fraction(); });
+}
+
+}  // namespace
+
+void init_filter(py::module_& m) { bind_particle_filter(m); }
+void init_slam(py::module_& m) { bind_slam_filter(m); }
+
+}  // namespace implicit::python
