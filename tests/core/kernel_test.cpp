@@ -143,7 +143,6 @@ TEST(NewtonMinimize, GaussNewtonFallbackReachesTheMinimumAndFactorsTheExactHessi
 // A banded path F = sum_i 1/2 (y_i - y_{i-1})^2 + sum_i cosh(y_i - t_i) with equalities
 // y_2 = 0.5 and y_5 = -1: the KKT conditions grad F + C nu = 0, C^T y = e are the oracle.
 struct CoshChain {
-  static constexpr int Block = 1;
   int n = 8;
   int num_blocks() const { return n; }
   double target(int i) const { return 0.3 * i - 1.0; }
