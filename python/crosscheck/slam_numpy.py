@@ -1,0 +1,108 @@
+#!/usr/bin/python3
+"""EKF-SLAM, FastSLAM 2.0 and implicit SLAM (A) and (B) written again from spec §3.5 in numpy.
+
+Usage: /usr/bin/python3 python/crosscheck/slam_numpy.py --method METHOD [--runs R]
+           [--particles M] [--seed S] [--compare RESULTS.json] [DATA.csv.gz ...]
+
+METHOD is ekf, fastslam2, implicit (variant A, the paper's: point landmarks fixed at creation)
+or implicit-rb (variant B, Rao-Blackwellised with EKF landmarks). DATA are synthetic data sets in
+the reference format of data/slam-synthetic (default: the ten paper_le1_seed*.csv.gz there).
+Known association; systematic resampling when ESS < M/2; the pose estimate is the weighted mean
+before resampling and the map estimate the weighted mean of the particles' landmarks with the
+weights before the last resampling. Run r on data set i uses seed + 1000 i + r (EKF-SLAM is
+deterministic and runs once per data set). The code shares nothing with the C++ library (its own
+model, Jacobians, minimiser, alignment and random numbers); the model and metrics are in
+slam_common.py, the filters in slam_filters.py.
+
+Prints one line per run (data set, seed, err%, pose RMSE, landmark RMSE, map shape, ESS/M,
+resamplings), then the mean ± SE of each quantity over data sets. With --compare, reads the
+method's row of ["reference"]["table6"] from a results.json written by `implicit reproduce` and
+prints numpy against reference with |diff| in combined standard errors; exits 1 when a quantity
+differs by more than 4.5 SE. The reference is at M = 100 over 50 data sets, so --compare
+requires --particles to equal it and at least two data sets.
+"""
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from slam_common import DATA_DIR, QUANTITIES, compare, load, read_reference, summarise
+from slam_filters import run_ekf, run_particle_filter
+
+METHODS = ("ekf", "fastslam2", "implicit", "implicit-rb")
+
+
+def default_data():
+    return sorted(DATA_DIR.glob("paper_le1_seed*.csv.gz"),
+                  key=lambda p: int(p.name.split("seed")[1].split(".")[0]))
+
+
+def fmt(v, digits):
+    return "-" if v is None else f"{v:.{digits}f}"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("data", nargs="*", type=Path, help="data sets (default: paper_le1_seed1..10)")
+    ap.add_argument("--method", required=True, choices=METHODS)
+    ap.add_argument("--runs", type=int, default=1, help="filter runs per data set")
+    ap.add_argument("--particles", type=int, default=100)
+    ap.add_argument("--seed", type=int, default=1, help="run r of data set i uses seed + 1000 i + r")
+    ap.add_argument("--compare", metavar="RESULTS_JSON", help="results.json of implicit reproduce")
+    a = ap.parse_args()
+    if a.runs < 1 or a.particles < 1:
+        ap.error("--runs and --particles must be at least 1")
+    paths = a.data or default_data()
+    row = None
+    if a.compare:
+        try:
+            row, ref_m, ref_sets = read_reference(a.compare, a.method)
+        except (OSError, ValueError, KeyError, StopIteration) as err:
+            print(f"{a.compare}: cannot read the table6 reference of {a.method}: {err}",
+                  file=sys.stderr)
+            return 1
+        if (a.method != "ekf" and a.particles != ref_m) or len(paths) < 2:
+            ap.error(f"--compare needs --particles {ref_m} (the reference's M) and two or more "
+                     "data sets: other sizes estimate other quantities")
+    runs = []
+    t0 = time.monotonic()
+    print("data seed err% pose_rmse_m map_rmse_m map_shape_m ess/M resamplings")
+    for i, path in enumerate(paths):
+        try:
+            d = load(path)
+        except (OSError, ValueError) as err:
+            print(f"{path}: cannot read a reference data set: {err}", file=sys.stderr)
+            return 1
+        for r in range(1 if a.method == "ekf" else a.runs):
+            seed = a.seed + 1000 * i + r
+            out = run_ekf(d)[0] if a.method == "ekf" else \
+                run_particle_filter(a.method, d, a.particles, seed)
+            out["data"] = path.name
+            runs.append(out)
+            print(f"{path.name} {seed} {out['error_percent']:.4f} {out['rmse_pose_m']:.4f} "
+                  f"{out['rmse_map_m']:.4f} {out['map_shape_m']:.5f} {fmt(out['ess_mean'], 4)} "
+                  f"{fmt(out['resamplings'], 0)}", flush=True)
+    summary = summarise(runs)
+    for key, label, _ in QUANTITIES:
+        if key in summary:
+            mean, se, sd = summary[key]
+            print(f"mean {label}: {mean:.4f} ± {se:.4f} (SE over data sets), single-run sd "
+                  f"{sd:.4f}")
+    m_text = "" if a.method == "ekf" else f", M = {a.particles}"
+    print(f"{a.method}: {len(runs)} runs on {len(paths)} data sets{m_text}, seed {a.seed}, "
+          f"{time.monotonic() - t0:.0f} s")
+    if row is None:
+        return 0
+    print(f"against the reference (M = {ref_m}, {ref_sets} data sets):")
+    bad = compare(summary, row, ref_sets)
+    if bad:
+        print(f"{a.method}: {bad} quantities disagree with the reference", file=sys.stderr)
+        return 1
+    print(f"{a.method}: every quantity agrees with the reference within 4.5 SE")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
