@@ -39,6 +39,25 @@ def default_data():
                   key=lambda p: int(p.name.split("seed")[1].split(".")[0]))
 
 
+def check_ekf_trace(path, trace):
+    """EKF-SLAM is deterministic: where a reference trace ekf_<data set> (n, x_hat, y_hat,
+    beta_hat) lies beside the data set, the numpy poses must equal it to round-off. Returns 1 on
+    a mismatch."""
+    ref_path = path.parent / ("ekf_" + path.name)
+    if not ref_path.exists():
+        return 0
+    ref = load(ref_path)
+    n = ref["n"].astype(int)
+    rows = n >= 1
+    got = trace[n[rows] - 1]
+    want = np.stack([ref["x_hat"], ref["y_hat"], ref["beta_hat"]], 1)[rows]
+    diff = float(np.abs(got - want).max())
+    ok = diff <= 1e-6
+    print(f"EKF trace against {ref_path.name}: max |diff| {diff:.1e} over {rows.sum()} steps "
+          f"({'ok' if ok else 'DISAGREES'}, tolerance 1e-6)")
+    return 0 if ok else 1
+
+
 def fmt(v, digits):
     return "-" if v is None else f"{v:.{digits}f}"
 
@@ -66,7 +85,7 @@ def main():
         if (a.method != "ekf" and a.particles != ref_m) or len(paths) < 2:
             ap.error(f"--compare needs --particles {ref_m} (the reference's M) and two or more "
                      "data sets: other sizes estimate other quantities")
-    runs = []
+    runs, bad_trace = [], 0
     t0 = time.monotonic()
     print("data seed err% pose_rmse_m map_rmse_m map_shape_m ess/M resamplings")
     for i, path in enumerate(paths):
@@ -77,8 +96,11 @@ def main():
             return 1
         for r in range(1 if a.method == "ekf" else a.runs):
             seed = a.seed + 1000 * i + r
-            out = run_ekf(d)[0] if a.method == "ekf" else \
-                run_particle_filter(a.method, d, a.particles, seed)
+            if a.method == "ekf":
+                out, trace = run_ekf(d)
+                bad_trace += check_ekf_trace(path, trace)
+            else:
+                out = run_particle_filter(a.method, d, a.particles, seed)
             out["data"] = path.name
             runs.append(out)
             print(f"{path.name} {seed} {out['error_percent']:.4f} {out['rmse_pose_m']:.4f} "
@@ -93,6 +115,8 @@ def main():
     m_text = "" if a.method == "ekf" else f", M = {a.particles}"
     print(f"{a.method}: {len(runs)} runs on {len(paths)} data sets{m_text}, seed {a.seed}, "
           f"{time.monotonic() - t0:.0f} s")
+    if bad_trace:
+        return 1
     if row is None:
         return 0
     print(f"against the reference (M = {ref_m}, {ref_sets} data sets):")
