@@ -232,7 +232,8 @@ def update(method, p, f, sigma1, k, z, new, rng):
 
 def run_particle_filter(method, d, m, seed):
     """One run on data set d with M = m particles; returns the metrics of slam_common.metrics
-    plus the mean ESS/M over the steps with an observation and the number of resamplings."""
+    plus the mean ESS/M over the steps with an observation, the number of resamplings and the
+    number of steps at which every particle failed (weights reset to equal)."""
     landmarks = load_landmarks()
     rng = np.random.default_rng(seed)
     p = Particles([d["x_true"][0], d["y_true"][0], d["beta_true"][0]], m, len(landmarks))
@@ -241,7 +242,7 @@ def run_particle_filter(method, d, m, seed):
     w_map, mu_map = w, p.mu
     steps = len(d["n"]) - 1
     path = np.empty((steps, 2))
-    ess_sum, weighted, resamplings = 0.0, 0, 0
+    ess_sum, weighted, resamplings, degenerate = 0.0, 0, 0, 0
     for n in range(1, steps + 1):
         f, sigma1 = predict(p.x, d["vc"][n], d["alpha"][n])
         if d["has_obs"][n] < 0.5:
@@ -249,10 +250,15 @@ def run_particle_filter(method, d, m, seed):
             path[n - 1] = w @ p.x[:, :2]
             continue
         k, z = int(d["landmark"][n]), np.array([d["z_r"][n], d["z_b"][n]])
-        log_w = log_w + update(method, p, f, sigma1, k, z, not seen[k], rng)
+        inc = update(method, p, f, sigma1, k, z, not seen[k], rng)
+        log_w = log_w + np.where(np.isnan(inc), -np.inf, inc)
         seen[k] = True
-        w = np.exp(log_w - log_w.max())
-        w /= w.sum()
+        if np.isfinite(log_w).any():
+            w = np.exp(log_w - log_w.max())
+            w /= w.sum()
+        else:  # every particle failed: start again from equal weights, and count it
+            w = np.full(m, 1.0 / m)
+            degenerate += 1
         with np.errstate(divide="ignore"):
             log_w = np.log(w)
         ess = 1.0 / (w**2).sum()
@@ -265,7 +271,8 @@ def run_particle_filter(method, d, m, seed):
             w, log_w = np.full(m, 1.0 / m), np.zeros(m)
             resamplings += 1
     out = metrics(path, d, np.einsum("m,mkj->kj", w_map, mu_map), landmarks, seen)
-    out.update(ess_mean=ess_sum / max(weighted, 1), resamplings=resamplings)
+    out.update(ess_mean=ess_sum / max(weighted, 1), resamplings=resamplings,
+               degenerate_steps=degenerate)
     return out
 
 

@@ -15,11 +15,15 @@ model, Jacobians, minimiser, alignment and random numbers); the model and metric
 slam_common.py, the filters in slam_filters.py.
 
 Prints one line per run (data set, seed, err%, pose RMSE, landmark RMSE, map shape, ESS/M,
-resamplings), then the mean ± SE of each quantity over data sets. With --compare, reads the
+resamplings, steps at which every particle failed and the weights restarted equal), then the
+mean ± SE of each quantity over data sets. With --compare, reads the
 method's row of ["reference"]["table6"] from a results.json written by `implicit reproduce` and
 prints numpy against reference with |diff| in combined standard errors; exits 1 when a quantity
-differs by more than 4.5 SE. The reference is at M = 100 over 50 data sets, so --compare
-requires --particles to equal it and at least two data sets.
+differs by more than 4.5 SE. The numpy SE is that of the mean over data sets; the reference's is
+its sd/sqrt(50) for err% and, for the quantities it gives without an sd, this run's single-run
+sd/sqrt(50) (both average one run per data set of the same generator). The reference is at
+M = 100 over 50 data sets, so --compare requires --particles to equal it and at least two data
+sets.
 """
 import argparse
 import sys
@@ -87,7 +91,8 @@ def main():
                      "data sets: other sizes estimate other quantities")
     runs, bad_trace = [], 0
     t0 = time.monotonic()
-    print("data seed err% pose_rmse_m map_rmse_m map_shape_m ess/M resamplings")
+    print("data seed err% pose_rmse_m map_rmse_m map_shape_m ess/M resamplings "
+          "degenerate_steps")
     for i, path in enumerate(paths):
         try:
             d = load(path)
@@ -105,7 +110,8 @@ def main():
             runs.append(out)
             print(f"{path.name} {seed} {out['error_percent']:.4f} {out['rmse_pose_m']:.4f} "
                   f"{out['rmse_map_m']:.4f} {out['map_shape_m']:.5f} {fmt(out['ess_mean'], 4)} "
-                  f"{fmt(out['resamplings'], 0)}", flush=True)
+                  f"{fmt(out['resamplings'], 0)} {fmt(out.get('degenerate_steps'), 0)}",
+                  flush=True)
     summary = summarise(runs)
     for key, label, _ in QUANTITIES:
         if key in summary:
