@@ -21,7 +21,8 @@ method's row of ["reference"]["table6"] from a results.json written by `implicit
 prints numpy against reference with |diff| in combined standard errors; exits 1 when a quantity
 differs by more than 4.5 SE. The numpy SE is that of the mean over data sets; the reference's is
 its sd/sqrt(50) for err% and, for the quantities it gives without an sd, this run's single-run
-sd/sqrt(50) (both average one run per data set of the same generator). The reference is at
+sd/sqrt(50) (both average one run per data set of the same generator), with the sd of the
+rounding of the reference's printed digits added in quadrature. The reference is at
 M = 100 over 50 data sets, so --compare requires --particles to equal it and at least two data
 sets.
 """
@@ -113,7 +114,7 @@ def main():
                   f"{fmt(out['resamplings'], 0)} {fmt(out.get('degenerate_steps'), 0)}",
                   flush=True)
     summary = summarise(runs)
-    for key, label, _ in QUANTITIES:
+    for key, label, _, _ in QUANTITIES:
         if key in summary:
             mean, se, sd = summary[key]
             print(f"mean {label}: {mean:.4f} ± {se:.4f} (SE over data sets), single-run sd "
