@@ -94,6 +94,11 @@ crosscheck: build
 	@echo "== Car Park MCL (Table 5), 10 runs of A:100, A:300, B:100, B:300 =="
 	@/usr/bin/python3 python/crosscheck/mcl_numpy.py --runs 10 --cells A:100,A:300,B:100,B:300 \
 	  --seed 1 --compare $(CROSSCHECK_OUT)/results.json
+	@for m in ekf fastslam2 implicit implicit-rb; do \
+	  echo "== SLAM $$m (Table 6), the 10 paper_le1 data sets, M = 100, one run each =="; \
+	  /usr/bin/python3 python/crosscheck/slam_numpy.py --method $$m --particles 100 --seed 1 \
+	    --compare $(CROSSCHECK_OUT)/results.json || exit 1; \
+	done
 
 bench: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS) --target benchmarks

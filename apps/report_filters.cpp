@@ -270,6 +270,13 @@ void slam_section(Document& doc, const json& results, const Numbers& numbers) {
       "Rao-Blackwellized variant (B) with EKF landmarks. The paper's Table 6 does not "
       "reproduce (below), so the comparison with the reference comes first.");
   doc.table(slam_reference_table(results, ref));
+  doc.paragraph(
+      "The reference is an independent numpy implementation of spec §3.5–3.6 that shares no code "
+      "with the library. Every row can be rerun from the repository: FastSLAM 1.0 with "
+      "python/crosscheck/fastslam1_numpy.py, the others with python/crosscheck/slam_numpy.py "
+      "--method ekf|fastslam2|implicit|implicit-rb, which `make crosscheck` compares with this "
+      "column on the ten bundled data sets (docs/reproducing.md, \"Where the reference columns "
+      "come from\").");
   const auto ms = particle_counts(results, "slam", paper, [](const json& s) {
     return s.value("method", std::string()) != "ekf";
   });

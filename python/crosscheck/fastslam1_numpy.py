@@ -9,59 +9,22 @@ vc, alpha, x_true, y_true, beta_true, has_obs, z_r, z_b, landmark; true landmark
 data/slam-synthetic/landmarks.csv). Known association, systematic resampling when ESS < M/2, map
 estimate = weighted mean of the particles' landmarks with the weights before the last resampling.
 It shares no code with the C++ library (its own model, Jacobians, alignment and random numbers),
-so agreement in distribution is evidence that both follow the spec, not each other.
+so agreement in distribution is evidence that both follow the spec, not each other. The model
+and data loading are in slam_common.py (shared with slam_numpy.py, the other SLAM methods).
 
 Prints one line per run: data set, seed, map shape [m], mean ESS/M, resamplings; then the mean
 map shape with its standard error. A run of R = 50 on the ten paper_le1 sets takes about a
 minute per 100 runs at M = 100.
 """
 import argparse
-import gzip
 import sys
 from pathlib import Path
 
 import numpy as np
 
-# Ute model and laser (spec §3.1-3.2).
-L, H, A, B, DT = 2.83, 0.76, 3.78, 0.5, 0.025
-P_CONTROL = 0.5
-Q = np.array([0.1, 0.1, 0.1 * np.pi / 180])
-SIGMA2 = np.diag([0.05, 0.05 * np.pi / 180])  # variances (spec E27)
-LANDMARKS = Path(__file__).resolve().parents[2] / "data" / "slam-synthetic" / "landmarks.csv"
-
-
-def wrap(a):
-    return a - 2 * np.pi * np.floor((a + np.pi) / (2 * np.pi))
-
-
-def load(path):
-    with gzip.open(path, "rt") as f:
-        cols = f.readline().strip().split(",")
-        rows = [[float(v) for v in line.strip().split(",")] for line in f if line.strip()]
-    d = np.array(rows)
-    return {c: d[:, i] for i, c in enumerate(cols)}
-
-
-def predict(x, vc, alpha):
-    """Mean f and covariance Sigma1 of the next pose for every particle (rows of x)."""
-    be = x[:, 2]
-    ta = np.tan(alpha) / L
-    s, c = np.sin(be), np.cos(be)
-    g = np.stack([c - ta * (A * s + B * c), s + ta * (A * c - B * s), np.full_like(be, ta)], 1)
-    k = np.stack([-(A * s + B * c), A * c - B * s, np.ones_like(be)], 1)
-    cc = vc / np.cos(alpha) ** 2 / L
-    sigma1 = DT * (P_CONTROL**2 * g[:, :, None] * g[:, None, :]
-                   + P_CONTROL**2 * cc**2 * k[:, :, None] * k[:, None, :] + np.diag(Q**2)[None])
-    return x + DT * vc * g, sigma1
-
-
-def map_shape(est, true):
-    """Landmark RMSE after the best rotation + translation of est onto true."""
-    me, mt = est.mean(0), true.mean(0)
-    u, _, vt = np.linalg.svd((est - me).T @ (true - mt))
-    d = np.diag([1.0, np.sign(np.linalg.det(u @ vt))])
-    aligned = (est - me) @ (u @ d @ vt) + mt
-    return float(np.sqrt(((aligned - true) ** 2).sum(1).mean()))
+# The Ute model, the laser, data loading and the map-shape metric (spec §3.1-3.2, §4.2) are
+# shared with the other SLAM cross-checks; none of it comes from the C++ library.
+from slam_common import SIGMA2, load, load_landmarks, map_shape, predict, wrap
 
 
 def run(d, landmarks, m, seed):
@@ -135,7 +98,7 @@ def main():
     a = ap.parse_args()
     if a.runs < 1 or a.particles < 1:
         ap.error("--runs and --particles must be at least 1")
-    landmarks = np.loadtxt(LANDMARKS, delimiter=",", skiprows=1)[:, 1:3]
+    landmarks = load_landmarks()
     shapes = []
     for i, path in enumerate(a.data):
         try:
