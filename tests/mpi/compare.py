@@ -13,7 +13,8 @@ import subprocess
 import sys
 
 # Fields that measure the machine or name the output folder, not the result.
-TIMING = {"seconds", "seconds_total", "cpu_ms_per_step", "cpu_ms_per_step_median", "peak_memory_mb",
+TIMING = {"seconds", "seconds_total", "cpu_ms_per_step", "cpu_ms_per_step_median",
+          "cpu_ms_per_step_std", "peak_memory_mb",
           "threads", "wall_ms_per_step", "started_utc", "command"}
 
 # Small settings of every subcommand whose runs are spread over the ranks, and the launches each
