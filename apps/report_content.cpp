@@ -45,7 +45,8 @@ Document build_report(const json& results, const std::filesystem::path& dir) {
       {"arm", "§3.2, Figure 4"},
       {"himmelblau", "§3.3, Table 4, Figure 5"},
       {"mcl", "§4.1, Table 5, Figure 6"},
-      {"slam", "§4.2, Table 6, Figure 7"}};
+      {"slam", "§4.2, Table 6, Figure 7"},
+      {"proposal_gain", "beyond the paper, Figure 8"}};
   for (const auto& [name, where] : experiments) {
     const auto& e = get(get(results, "experiments"), name);
     const auto& runs = experiment_runs(results, name);
@@ -75,6 +76,7 @@ Document build_report(const json& results, const std::filesystem::path& dir) {
   himmelblau_section(doc, results, numbers, dir);
   mcl_section(doc, results, numbers);
   slam_section(doc, results, numbers);
+  proposal_gain_section(doc, results, numbers);
 
   doc.heading(2, "How to repeat this run");
   doc.code(results.value("command", std::string("implicit reproduce")));
