@@ -1,4 +1,4 @@
-// When does the implicit proposal pay? Implicit and bootstrap MCL (spec §3.8-3.9) on simulated
+// When does the implicit proposal pay? Implicit and bootstrap MCL (spec §3.3-3.4) on simulated
 // unicycle logs, against (a) the ratio of the per-step process noise to the sensor noise and
 // (b) the motion step length, with the Car Park's noise ratio for configs A and B as real points.
 //
