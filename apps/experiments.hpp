@@ -94,4 +94,19 @@ struct SlamSettings {
 /// slam_<method>_M<particles>_{path,map}.csv.
 nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx);
 
+// ---- When the implicit proposal pays (beyond the paper) -------------------------------------
+struct ProposalGainSettings {
+  int particles = 100;
+  int runs = 20;                                          ///< simulated logs per point
+  double duration = 48.0;                                 ///< [s] simulated per log
+  double ratio_dt = 0.1;                                  ///< [s] step length of the ratio sweep
+  std::vector<double> ratios = {0.1, 0.3, 1, 3, 10};      ///< process sd per step / range sd
+  std::vector<double> dts = {0.02, 0.05, 0.1, 0.2, 0.4};  ///< [s] step lengths of the dt sweep
+  double dt_range_sd = 0.02;                              ///< [m] range sd of the dt sweep
+};
+/// Keys: particles, runs, duration_s, scan_period_s, seed, threads, points (each: sweep, dt,
+/// range_sd, bearing_sd, ratio, implicit/standard/diff with ess, rmse_m, cpu_ms_per_step and
+/// their _se), carpark_ratio {A, B}, seconds. CSV: proposal_gain.csv.
+nlohmann::json run_proposal_gain(const ProposalGainSettings& s, const RunContext& ctx);
+
 }  // namespace implicit::app

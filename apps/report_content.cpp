@@ -41,11 +41,9 @@ Document build_report(const json& results, const std::filesystem::path& dir) {
   Table summary;
   summary.header = {"experiment", "paper", "status", "configurations ok", "seconds"};
   const std::vector<std::pair<std::string, std::string>> experiments = {
-      {"slit", "§3.1, Table 2, Figures 1–2"},
-      {"arm", "§3.2, Figure 4"},
-      {"himmelblau", "§3.3, Table 4, Figure 5"},
-      {"mcl", "§4.1, Table 5, Figure 6"},
-      {"slam", "§4.2, Table 6, Figure 7"}};
+      {"slit", "§3.1, Table 2, Figures 1–2"},    {"arm", "§3.2, Figure 4"},
+      {"himmelblau", "§3.3, Table 4, Figure 5"}, {"mcl", "§4.1, Table 5, Figure 6"},
+      {"slam", "§4.2, Table 6, Figure 7"},       {"proposal_gain", "beyond the paper, Figure 8"}};
   for (const auto& [name, where] : experiments) {
     const auto& e = get(get(results, "experiments"), name);
     const auto& runs = experiment_runs(results, name);
@@ -75,6 +73,7 @@ Document build_report(const json& results, const std::filesystem::path& dir) {
   himmelblau_section(doc, results, numbers, dir);
   mcl_section(doc, results, numbers);
   slam_section(doc, results, numbers);
+  proposal_gain_section(doc, results, numbers);
 
   doc.heading(2, "How to repeat this run");
   doc.code(results.value("command", std::string("implicit reproduce")));

@@ -76,5 +76,6 @@ void himmelblau_section(Document& doc, const json& results, const Numbers& numbe
                         const std::filesystem::path& dir);
 void mcl_section(Document& doc, const json& results, const Numbers& numbers);
 void slam_section(Document& doc, const json& results, const Numbers& numbers);
+void proposal_gain_section(Document& doc, const json& results, const Numbers& numbers);
 
 }  // namespace implicit::app::report::parts

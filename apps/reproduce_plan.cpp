@@ -168,6 +168,27 @@ Plan make_plan(bool quick, const std::vector<std::string>& only) {
                               "association)"},
                              {"figure_data", "implicit (A), M = 100"}};
   }
+  if (selected("proposal_gain")) {
+    // Beyond the paper: when implicit MCL beats bootstrap MCL. The Car Park points of the figure
+    // are the mcl configurations above (M = 100, configs A and B), not rerun here.
+    ProposalGainSettings s;
+    if (quick) {
+      s.runs = 2;
+      s.duration = 12.0;
+    } else {
+      s.runs = 40;
+      s.duration = 96.0;
+    }
+    plan.settings["proposal_gain"] = {{"particles", s.particles},
+                                      {"runs", s.runs},
+                                      {"duration_s", s.duration},
+                                      {"ratios", s.ratios},
+                                      {"dts", s.dts},
+                                      {"carpark_points", "mcl M = 100, configs A and B"}};
+    plan.configs.push_back({"proposal_gain", "proposal_gain", plan.settings["proposal_gain"],
+                            0.02 * s.runs * s.duration, true,
+                            [s](const RunContext& ctx) { return run_proposal_gain(s, ctx); }});
+  }
   return plan;
 }
 
