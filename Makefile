@@ -15,7 +15,7 @@ SANITIZE_CXX ?= clang++-14
 FUZZ_TARGETS = robot_log carpark slam_data results_json
 SANITIZE_TARGETS ?= implicit_cli test_core test_filter test_control test_robot test_slam test_apps \
 	$(addprefix fuzz_,$(FUZZ_TARGETS))
-SANITIZE_EXCLUDE ?= slow|packaging
+SANITIZE_EXCLUDE ?= slow|packaging|docs
 # Each fuzz target runs this many seconds in `make fuzz-smoke`.
 FUZZ_SECONDS ?= 25
 
@@ -41,7 +41,8 @@ test-slow: build
 
 # -O1 keeps the instrumented tests fast enough; assertions stay on (no NDEBUG). The packaging test
 # is left out: its consumer is built with the default compiler, which cannot link an instrumented
-# library, and `make test` runs it.
+# library, and `make test` runs it; so are the documentation checks (label docs), whose example
+# programs `make test` builds and runs.
 configure-sanitize: deps
 	@CXX=$(SANITIZE_CXX) cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=Sanitize \
 	  -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -gline-tables-only" -DIMPLICIT_SANITIZE=ON \

@@ -136,7 +136,8 @@ class ControlProblem {
         require(!std::isnan(op.lower) && !std::isnan(op.upper) && op.lower < op.upper,
                 "hard wall {}, opening {}: expected lower < upper, got ({}, {})", j, o, op.lower,
                 op.upper);
-        require(o == 0 || w.openings[o - 1].upper <= op.lower,
+        if (o == 0) continue;  // the message's arguments read opening o - 1: only past the first
+        require(w.openings[o - 1].upper <= op.lower,
                 "hard wall {}, opening {}: expected sorted disjoint openings, got ({}, {}) after "
                 "({}, {})",
                 j, o, op.lower, op.upper, w.openings[o - 1].lower, w.openings[o - 1].upper);
