@@ -56,11 +56,12 @@ CarParkData load_carpark(const std::filesystem::path& dir) {
     const auto t = read_numeric_csv(dir / "carpark_beacons.csv", {"id", "east_m", "north_m"});
     for (std::size_t r = 0; r < t.rows; ++r) {
       const double id = t.at(r, 0);
-      if (id != std::floor(id) || id < 0 || d.beacons.index_of(static_cast<int>(id)) >= 0)
+      // Bounded before the conversion to int (converting a larger double is undefined).
+      if (id != std::floor(id) || id < 0 || id > std::numeric_limits<int>::max() ||
+          d.beacons.index_of(static_cast<int>(id)) >= 0)
         throw ParseError(
-            fmt::format("{}:{}: field 'id': expected a new non-negative integer id, "
-                        "got {}",
-                        t.file, t.line_of(r), id));
+            fmt::format("{}:{}: field 'id': expected a new integer id in [0, {}], got {}", t.file,
+                        t.line_of(r), std::numeric_limits<int>::max(), id));
       d.beacons.add(static_cast<int>(id), Landmark(t.at(r, 1), t.at(r, 2)));
     }
   }

@@ -273,6 +273,15 @@ TEST_F(CarParkBadInput, ShortRow) {
       << message();
 }
 
+// A beacon id beyond int: converting it was undefined behaviour (found by fuzz_carpark).
+TEST_F(CarParkBadInput, BeaconIdBeyondIntIsRefused) {
+  replace_line("carpark_beacons.csv", 3, "2224000000000000,9.9,1.0");
+  EXPECT_NE(message().find("carpark_beacons.csv:3: field 'id': expected a new integer id in [0, "
+                           "2147483647], got 2224000000000000"),
+            std::string::npos)
+      << message();
+}
+
 TEST_F(CarParkBadInput, GzippedFilesAreReadTransparently) {
   const CarParkData plain = load_carpark(dir_);
   for (const char* name : {"carpark_dr.csv", "carpark_laser_range_cm.csv"}) {
