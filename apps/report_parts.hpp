@@ -15,9 +15,9 @@ namespace implicit::app::report::parts {
 using nlohmann::json;
 using RunPredicate = std::function<bool(const json& settings)>;
 
-/// The paper's and the reference's numbers the report compares with: results.json's "paper"
-/// and "reference" when present (so that a report rebuilt from an old results.json shows the
-/// numbers that run was compared with), otherwise the data files.
+/// The paper's and the reference's numbers the report compares with: always the bundled data
+/// files (data/report/), also for a report rebuilt from an older results.json, whose copies
+/// under "paper" and "reference" are kept for provenance only.
 struct Numbers {
   json paper;
   json reference;

@@ -8,6 +8,7 @@
 // finding.
 
 #include <cstdint>
+#include <cstdlib>
 #include <string_view>
 
 #include <nlohmann/json.hpp>
@@ -16,6 +17,12 @@
 #include "report.hpp"
 #include "results_file.hpp"
 #include "scratch.hpp"
+
+// The report's paper and reference numbers come from the bundled data files (data/report/).
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  setenv("IMPLICIT_DATA_DIR", IMPLICIT_FUZZ_DATA_DIR, 0);
+  return 0;
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   namespace report = implicit::app::report;
