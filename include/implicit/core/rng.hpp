@@ -42,6 +42,8 @@ inline constexpr std::uint64_t kInitial = 4;       ///< initial particle cloud
 inline constexpr std::uint64_t kProposal = 5;      ///< draws of a proposal (e.g. bootstrap)
 inline constexpr std::uint64_t kMixture = 6;       ///< mixture component choice
 inline constexpr std::uint64_t kData = 7;          ///< synthetic data generation
+inline constexpr std::uint64_t kRecovery = 8;      ///< injection choices and draws of recovery
+inline constexpr std::uint64_t kGlobalInit = 9;    ///< draws of a global initialisation
 inline constexpr std::uint64_t kUser = 1000;       ///< first value free for user code
 }  // namespace purpose
 
