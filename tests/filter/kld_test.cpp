@@ -224,6 +224,8 @@ TEST(KldResample, StopsAtTheBoundOfTheBinsItOccupied) {
       Rng rng = resampling_rng(seed);
       const auto a = kld_resample(w, p, o, rng);
       const std::size_t k = occupied_bins(a, p, o);
+      std::printf("eps %.2f z %.3f M %d seed %d: %zu draws, %zu bins\n", c.eps, c.z, c.m,
+                  static_cast<int>(seed), a.size(), k);
       // The count reached when the loop stopped is the count for the bins occupied then: it grows
       // with k, so the first n with n >= count(k_n) satisfies it with equality.
       EXPECT_EQ(a.size(), kld_particle_count(k, o))
@@ -264,6 +266,7 @@ TEST(KldResample, AncestorFrequenciesMatchTheWeights) {
     const double expected = 20000.0 * w[i] / total;
     chi2 += (counts[i] - expected) * (counts[i] - expected) / expected;
   }
+  std::printf("Pearson statistic over 20000 draws: %.3f (threshold 16.27)\n", chi2);
   EXPECT_LT(chi2, 16.27);
 }
 
