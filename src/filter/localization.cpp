@@ -116,3 +116,37 @@ double error_percent(const std::vector<Pose>& estimate, const robot::TruthTrack&
 }
 
 }  // namespace implicit::filter
+
+namespace implicit::filter {
+
+LocalizationProblem without_steps(const LocalizationProblem& problem, double from, double to) {
+  require(from <= to && !std::isnan(from) && !std::isnan(to),
+          "without_steps: expected an interval from <= to, got [{}, {})", from, to);
+  const std::size_t n = problem.schedule.steps.size();
+  const bool has_truth = problem.truth.position.size() == n;
+  const bool has_heading = problem.truth.heading.size() == n;
+  const bool has_fixes = problem.position_fixes.size() == n;
+  LocalizationProblem out = problem;
+  out.schedule.steps.clear();
+  out.step_dt.clear();
+  out.detections.clear();
+  out.truth = {};
+  out.position_fixes.clear();
+  out.detections_total = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = problem.schedule.steps[k].time;
+    if (t >= from && t < to) continue;
+    out.schedule.steps.push_back(problem.schedule.steps[k]);
+    if (!problem.step_dt.empty()) out.step_dt.push_back(problem.step_dt[k]);
+    out.detections.push_back(problem.detections[k]);
+    out.detections_total += static_cast<int>(problem.detections[k].size());
+    if (has_truth) out.truth.position.push_back(problem.truth.position[k]);
+    if (has_heading) out.truth.heading.push_back(problem.truth.heading[k]);
+    if (has_fixes) out.position_fixes.push_back(problem.position_fixes[k]);
+  }
+  require(!out.schedule.steps.empty(),
+          "without_steps: removing [{}, {}) s leaves no step of the log", from, to);
+  return out;
+}
+
+}  // namespace implicit::filter

@@ -43,6 +43,12 @@ struct LocalizationProblem {
 /// initial pose, no controls or no map, or when a detection names a landmark id not in the map.
 LocalizationProblem make_problem(const robot::RobotLog& log, double dt);
 
+/// The problem without the steps whose time is in [from, to): their controls and detections are
+/// never seen, and the step after the gap keeps its own length, so the filter's pose goes wrong
+/// without being told ("kidnapping" by lost odometry). Also used to start a run at a later time
+/// (from = -inf). Truth and fixes are dropped with their steps. Throws if no step is left.
+LocalizationProblem without_steps(const LocalizationProblem& problem, double from, double to);
+
 struct LocalizationRun {
   std::vector<StepSummary> steps;
   double seconds = 0.0;      ///< wall time of the filter loop (initialisation excluded)

@@ -27,6 +27,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <span>
 #include <utility>
 #include <vector>
@@ -38,7 +39,9 @@
 #include "implicit/core/resampling.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/filter/kld.hpp"
 #include "implicit/filter/proposals.hpp"
+#include "implicit/filter/recovery.hpp"
 #include "implicit/robot/landmark_map.hpp"
 #include "implicit/robot/models.hpp"
 
@@ -50,6 +53,12 @@ struct FilterOptions {
   ResamplingScheme resampling = ResamplingScheme::kSystematic;
   std::uint64_t seed = 0;  ///< first field of every stream key
   AssociationOptions association;
+  /// Adaptive particle count: at every update step resample to the KLD bound (kld.hpp). The
+  /// first count is `particles`.
+  KldOptions kld;
+  /// Injection of particles from a recovery source when the filter looks lost (recovery.hpp);
+  /// needs set_recovery_source().
+  RecoveryOptions recovery;
 };
 
 struct StepSummary {
@@ -61,11 +70,14 @@ struct StepSummary {
   bool updated = false;                   ///< detections were processed at this step
   double log_likelihood_increment = 0.0;  ///< 0 at prediction-only steps
   bool all_weights_zero = false;          ///< every particle got weight 0: weights reset to uniform
-  double detections_used = 0.0;     ///< mean over particles (weighted by the previous weights)
-  double detections_dropped = 0.0;  ///< idem
-  double newton_evaluations = 0.0;  ///< mean over particles
-  int fallbacks = 0;                ///< particles that needed a Cholesky fallback
-  int failures = 0;                 ///< particles with a non-finite model output (weight 0)
+  double detections_used = 0.0;        ///< mean over particles (weighted by the previous weights)
+  double detections_dropped = 0.0;     ///< idem
+  double newton_evaluations = 0.0;     ///< mean over particles
+  int fallbacks = 0;                   ///< particles that needed a Cholesky fallback
+  int failures = 0;                    ///< particles with a non-finite model output (weight 0)
+  std::size_t particles = 0;           ///< particles after this step (varies under KLD-sampling)
+  double injection_probability = 0.0;  ///< recovery: the fraction drawn from the source
+  int injected = 0;                    ///< recovery: particles drawn from the source
 };
 
 /// A direct measurement of the state's position (x, y) ~ N(position, std^2 I): a GPS fix. The
@@ -108,16 +120,31 @@ class ParticleFilter {
     context_.log_det_noise = 2.0 * std::log(llt.matrixL()(0, 0) * llt.matrixL()(1, 1));
     context_.log_clutter = robot::clutter_log_density(options_.association.gate, noise);
     context_.association = options_.association;
-    const std::size_t m = options_.particles;
-    particles_.resize(m);
-    next_.resize(m);
-    log_weights_.assign(m, -std::log(static_cast<double>(m)));
-    weights_.assign(m, 1.0 / static_cast<double>(m));
-    increments_.resize(m);
-    sin_.resize(m);
-    cos_.resize(m);
-    stats_.resize(m);
+    if (options_.kld.enabled) validate(options_.kld);
+    if (options_.recovery.enabled) validate(options_.recovery);
+    resize(options_.particles);
   }
+
+  using Context = ProposalContext<Motion, Sensor>;
+
+  /// The source of recovery's injected particles (used when options().recovery.enabled).
+  void set_recovery_source(std::shared_ptr<RecoverySource<Context>> source) {
+    recovery_source_ = std::move(source);
+  }
+  /// What the proposals see at a step with detections z and no control (for a global
+  /// initialisation, which samples the pose from the detections alone). Valid while z lives.
+  Context context(std::span<const LabelledMeasurement> z) const {
+    Context c = context_;
+    c.motion = &step_motion_;
+    c.sensor = &sensor_;
+    c.map = std::span<const Landmark>(map_.positions());
+    c.u = Control::Zero();
+    c.z = z;
+    return c;
+  }
+
+  /// The lost signal's averages (recovery.hpp).
+  const LikelihoodAverages& likelihood_averages() const { return averages_; }
 
   const Motion& motion() const { return motion_; }
   const Sensor& sensor() const { return sensor_; }
@@ -152,6 +179,29 @@ class ParticleFilter {
     std::copy(particles.begin(), particles.end(), particles_.begin());
     reset_weights();
     step_ = 0;
+    averages_.reset();
+    summarize();
+  }
+
+  /// Starts from weighted particles (log weights, not necessarily normalised), e.g. an importance
+  /// sample of a global initialisation; the particle count becomes particles.size().
+  void initialize(std::span<const Pose> particles, std::span<const double> log_weights) {
+    require(!particles.empty() && particles.size() == log_weights.size(),
+            "particle filter: expected as many initial log weights as particles (at least one), "
+            "got {} and {}",
+            log_weights.size(), particles.size());
+    resize(particles.size());
+    std::copy(particles.begin(), particles.end(), particles_.begin());
+    std::copy(log_weights.begin(), log_weights.end(), log_weights_.begin());
+    const double total = log_sum_exp(log_weights_);
+    require(total > -std::numeric_limits<double>::infinity() && !std::isnan(total),
+            "particle filter: expected initial log weights with a finite total, got {}", total);
+    for (std::size_t j = 0; j < log_weights_.size(); ++j) {
+      log_weights_[j] -= total;
+      weights_[j] = std::exp(log_weights_[j]);
+    }
+    step_ = 0;
+    averages_.reset();
     summarize();
   }
 
@@ -203,10 +253,24 @@ class ParticleFilter {
     context_.u = u;
     context_.z = z;
     const std::uint64_t n = step_;
+    const double p = injection_probability(z);
+    std::vector<char>& injected = injected_;
     parallel_for(particles_.size(), [&](std::size_t j) {
-      Rng rng({options_.seed, n, j, Proposal::kPurpose});
       stats_[j] = ParticleStats{};
-      increments_[j] = proposal_.propose(context_, particles_[j], rng, next_[j], stats_[j]);
+      injected[j] = 0;
+      if (p > 0.0) {
+        // The choice has its own stream: the proposal's draws do not depend on it.
+        Rng choice({options_.seed, n, j, purpose::kRecovery});
+        if (choice.uniform() < p) {
+          injected[j] = 1;
+          increments_[j] =
+              injected_log_weight_ + recovery_source_->draw(context_, choice, next_[j]);
+          return;
+        }
+      }
+      Rng rng({options_.seed, n, j, Proposal::kPurpose});
+      increments_[j] =
+          proposal_.propose(context_, particles_[j], rng, next_[j], stats_[j]) + kept_log_weight_;
     });
     std::swap(particles_, next_);
     if (fix) {
@@ -228,9 +292,45 @@ class ParticleFilter {
       summary_.failures += stats_[j].failed ? 1 : 0;
     }
     summary_.newton_evaluations /= static_cast<double>(stats_.size());
+    summary_.injection_probability = p;
+    for (char c : injected) summary_.injected += c;
     if (summary_.updated || summary_.failures > 0) update_weights();
+    if (options_.recovery.enabled) {
+      // With p = 0 the factor 1 - epsilon of the motion branch is common to all particles and
+      // was left out of the weights (bit-identical to a filter without recovery); it belongs to
+      // the likelihood of the data all the same.
+      if (p == 0.0 && !z.empty())
+        summary_.log_likelihood_increment += std::log1p(-options_.recovery.kidnap_probability);
+      averages_.update(summary_.log_likelihood_increment, static_cast<int>(z.size()),
+                       options_.recovery);
+    }
     summarize();
     return summary_;
+  }
+
+  /// The fraction of this step's particles drawn from the recovery source (0 without one, or
+  /// without detections to weight them by), and the log weight factors of both branches.
+  double injection_probability(std::span<const LabelledMeasurement> z) {
+    injected_log_weight_ = kept_log_weight_ = 0.0;
+    if (!options_.recovery.enabled || !recovery_source_ || z.empty()) return 0.0;
+    const double p = averages_.injection_probability(options_.recovery);
+    if (!(p > 0.0) || !recovery_source_->prepare(context_)) return 0.0;
+    const double eps = options_.recovery.kidnap_probability;
+    injected_log_weight_ = std::log(eps) - std::log(p);
+    kept_log_weight_ = std::log1p(-eps) - std::log1p(-p);
+    return p;
+  }
+
+  void resize(std::size_t m) {
+    particles_.resize(m);
+    next_.resize(m);
+    log_weights_.assign(m, -std::log(static_cast<double>(m)));
+    weights_.assign(m, 1.0 / static_cast<double>(m));
+    increments_.resize(m);
+    sin_.resize(m);
+    cos_.resize(m);
+    stats_.resize(m);
+    injected_.resize(m);
   }
 
   void reset_weights() {
@@ -255,7 +355,16 @@ class ParticleFilter {
     }
     const double ess = effective_sample_size(weights_);
     summary_.ess = ess;  // before resampling: the quality of this update's weights
-    if (needs_resampling(ess, m, options_.resample_threshold)) {
+    if (options_.kld.enabled) {
+      // KLD-sampling draws as many ancestors as the occupied bins call for, at every update.
+      Rng rng({options_.seed, step_, 0, purpose::kResampling});
+      const std::vector<std::size_t> idx = kld_resample(weights_, particles_, options_.kld, rng);
+      next_.resize(idx.size());
+      for (std::size_t j = 0; j < idx.size(); ++j) next_[j] = particles_[idx[j]];
+      std::swap(particles_, next_);
+      resize(particles_.size());  // equal weights
+      summary_.resampled = true;
+    } else if (needs_resampling(ess, m, options_.resample_threshold)) {
       Rng rng({options_.seed, step_, 0, purpose::kResampling});
       const std::vector<std::size_t> idx = resample(options_.resampling, weights_, m, rng);
       for (std::size_t j = 0; j < m; ++j) next_[j] = particles_[idx[j]];
@@ -296,6 +405,7 @@ class ParticleFilter {
     }
     summary_.mean = mean;
     summary_.covariance = cov;
+    summary_.particles = m;
     if (!summary_.updated) summary_.ess = effective_sample_size(weights_);
   }
 
@@ -310,6 +420,10 @@ class ParticleFilter {
   std::vector<double> log_weights_, weights_, increments_;
   std::vector<double> sin_, cos_;  ///< of each particle's heading (summarize's scratch)
   std::vector<ParticleStats> stats_;
+  std::vector<char> injected_;  ///< per particle: drawn from the recovery source this step
+  std::shared_ptr<RecoverySource<Context>> recovery_source_;
+  LikelihoodAverages averages_;
+  double injected_log_weight_ = 0.0, kept_log_weight_ = 0.0;  ///< log(eps/p), log((1-eps)/(1-p))
   std::uint64_t step_ = 0;
   StepSummary summary_;
 };
