@@ -98,6 +98,10 @@ struct GlobalInitOptions {
   std::size_t max_modes = 2000;
   int min_detections = 2;  ///< fewer associated detections at a start: skip that start (F is
                            ///< flat along a curve with one detection)
+  /// Modes whose mixture weight pi_k is below exp(-max_log_weight_gap) times the largest are left
+  /// out: never drawn (a uniform has 53 bits), so they would only cost time in q. Leaving out
+  /// components keeps the weights exact (any mixture is a valid proposal).
+  double max_log_weight_gap = 40.0;
   int max_reassociations = 4;  ///< polishing rounds (re-associate at the minimum, Newton again)
   NewtonOptions newton;
 };
@@ -108,6 +112,7 @@ struct GlobalInitStats {
   std::size_t converged = 0;   ///< finite minima with an SPD Hessian inside the bounds
   std::size_t degenerate = 0;  ///< of those, left out: heading std above pi/3
   std::size_t modes = 0;       ///< after merging (and max_modes)
+  std::size_t negligible = 0;  ///< distinct minima left out by max_log_weight_gap
   std::size_t truncated = 0;   ///< distinct minima left out by max_modes
   long evaluations = 0;        ///< objective evaluations (with derivatives) of all Newton runs
 };
@@ -264,7 +269,8 @@ class WrappedMixture {
 /// covariance diag(spacing^2, spacing^2, (pi / headings)^2) (the gate reflects the cover's
 /// coarseness), build F = -log p(z | x) of that association with no prior, minimise from x0,
 /// re-associate at the minimum and polish; keep finite minima with an SPD L inside the bounds and a
-/// heading std of at most pi/3; merge duplicates (keep the lowest phi). Returns the Laplace<3>
+/// heading std of at most pi/3; merge duplicates (keep the lowest phi); leave out the negligible
+/// (max_log_weight_gap) and those beyond max_modes. Returns the Laplace<3>
 /// components (headings in [-pi, pi)), sorted by phi. Parallel over starts, deterministic.
 template <typename Ctx>
 std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
@@ -325,12 +331,19 @@ std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
   // Lowest phi first; ties by start index, so the result does not depend on the thread count.
   std::stable_sort(order.begin(), order.end(),
                    [&](std::size_t i, std::size_t j) { return found[i].phi < found[j].phi; });
+  double best_log_weight = -std::numeric_limits<double>::infinity();  // max of -phi - log det L
+  for (const std::size_t i : order)
+    best_log_weight = std::max(best_log_weight, -found[i].phi - found[i].log_det_L);
   std::vector<Laplace<3>> modes;
   for (const std::size_t i : order) {
     const bool duplicate = std::any_of(modes.begin(), modes.end(), [&](const Laplace<3>& m) {
       return detail::pose_distance(m.mu, found[i].mu) < o.merge_distance;
     });
     if (duplicate) continue;
+    if (-found[i].phi - found[i].log_det_L < best_log_weight - o.max_log_weight_gap) {
+      ++st.negligible;
+      continue;
+    }
     if (modes.size() == o.max_modes) {
       ++st.truncated;
       continue;
