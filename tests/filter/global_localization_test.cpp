@@ -5,8 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <string>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "implicit/core/parallel.hpp"
@@ -166,10 +166,11 @@ TEST(GlobalLocalization, WeightsAreExactAgainstGridIntegral) {
   const Vec<3> se_mean = var.cwiseSqrt() / sum;
   for (int i = 0; i < 3; ++i)
     EXPECT_NEAR(m(i), grid_mean(i), 4.5 * se_mean(i)) << "mean entry " << i;
-  std::printf("Z grid %.6g weights %.6g +- %.2g; mean grid (%.5f %.5f %.5f) weights (%.5f %.5f %.5f)"
-              " +- (%.2g %.2g %.2g); Laplace sd (%.3g %.3g %.3g)\n",
-              z, mean, se, grid_mean(0), grid_mean(1), grid_mean(2), m(0), m(1), m(2),
-              se_mean(0), se_mean(1), se_mean(2), sd(0), sd(1), sd(2));
+  std::printf(
+      "Z grid %.6g weights %.6g +- %.2g; mean grid (%.5f %.5f %.5f) weights (%.5f %.5f %.5f)"
+      " +- (%.2g %.2g %.2g); Laplace sd (%.3g %.3g %.3g)\n",
+      z, mean, se, grid_mean(0), grid_mean(1), grid_mean(2), m(0), m(1), m(2), se_mean(0),
+      se_mean(1), se_mean(2), sd(0), sd(1), sd(2));
 }
 
 TEST(GlobalLocalization, SameNumbersForOneAndTwoThreads) {

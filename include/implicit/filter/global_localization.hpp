@@ -282,8 +282,8 @@ std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
           o.cover_headings);
   require(o.min_detections >= 1,
           "global localization: expected min_detections of at least 1, got {}", o.min_detections);
-  require(o.merge_distance >= 0, "global localization: expected a non-negative merge distance, got {}",
-          o.merge_distance);
+  require(o.merge_distance >= 0,
+          "global localization: expected a non-negative merge distance, got {}", o.merge_distance);
   require(b.x_max > b.x_min && b.y_max > b.y_min,
           "global localization: expected a pose box of positive area, got [{}, {}] x [{}, {}]",
           b.x_min, b.x_max, b.y_min, b.y_max);
@@ -397,7 +397,8 @@ void sample_pose_mixture(const Ctx& ctx, const std::vector<Laplace<3>>& modes, c
 
 /// Uniform cloud over the bounds and all headings (the bootstrap's global start); with equal
 /// weights it is an exact sample of u. Particle j uses Rng({seed, 0, j, purpose::kGlobalInit}).
-inline void sample_uniform_poses(const PoseBounds& b, std::uint64_t seed, std::span<Pose> particles) {
+inline void sample_uniform_poses(const PoseBounds& b, std::uint64_t seed,
+                                 std::span<Pose> particles) {
   require(b.x_max > b.x_min && b.y_max > b.y_min,
           "global localization: expected a pose box of positive area, got [{}, {}] x [{}, {}]",
           b.x_min, b.x_max, b.y_min, b.y_max);
