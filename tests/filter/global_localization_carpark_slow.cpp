@@ -71,6 +71,25 @@ TEST(GlobalLocalizationCarPark, ModesOfFirstScanIncludeGpsPosition) {
   std::vector<double> w(kN);
   const WeightSummary ws = normalize_log_weights(lw, w);
   const double ess = ws.ess;
+  // Every detection's likelihood is at least p0, so log Z >= n log p0 (the all-clutter floor).
+  const double floor = static_cast<double>(z.size()) * ctx.log_clutter;
+  std::vector<double> lw_defensive(kN);
+  sample_pose_mixture(ctx, modes, bounds, 1, 0, x, lw_defensive, 0.5);
+  const WeightSummary wd = normalize_log_weights(lw_defensive, w);
+  // One-sided check of the defensive estimate against the bound: mean + 4.5 SE >= p0^n.
+  double sum = 0.0, sum2 = 0.0;
+  for (const double l : lw_defensive) {
+    const double v = std::exp(l - floor);  // weights in units of p0^n
+    sum += v;
+    sum2 += v * v;
+  }
+  const double n = static_cast<double>(kN), mean = sum / n;
+  const double se = std::sqrt((sum2 / n - mean * mean) / (n - 1.0));
+  EXPECT_GE(mean + 4.5 * se, 1.0);
+  std::printf(
+      "log Z >= n log p0 = %.4f; half the draws uniform: log mean weight %.4f (relative SE %.2g), "
+      "ESS %.0f\n",
+      floor, wd.log_mean, se / mean, wd.ess);
   std::printf(
       "scan t=%.3f s, %zu detections; box [%.1f, %.1f] x [%.1f, %.1f]; starts %zu, skipped %zu, "
       "converged %zu, degenerate %zu, negligible %zu, modes %zu, evaluations %ld, %.3f s; "

@@ -107,7 +107,9 @@ struct SmallMap {
   }
 };
 
-TEST(GlobalLocalization, WeightsAreExactAgainstGridIntegral) {
+/// Z and the posterior mean by the grid against the weights of N = 20000 draws with the given
+/// defensive uniform fraction.
+void check_weights_against_grid(double uniform_fraction) {
   const SmallMap s;
   const auto modes = find_pose_modes(s.ctx, s.bounds, GlobalInitOptions{});
   ASSERT_EQ(modes.size(), 1u);
@@ -140,7 +142,7 @@ TEST(GlobalLocalization, WeightsAreExactAgainstGridIntegral) {
   constexpr std::size_t kN = 20000;
   std::vector<Pose> particles(kN);
   std::vector<double> log_w(kN);
-  sample_pose_mixture(s.ctx, modes, s.bounds, 11, 0, particles, log_w);
+  sample_pose_mixture(s.ctx, modes, s.bounds, 11, 0, particles, log_w, uniform_fraction);
   double sum = 0.0, sum2 = 0.0;
   Vec<3> wx = Vec<3>::Zero();
   std::vector<Vec<3>> offsets(kN);
@@ -172,6 +174,10 @@ TEST(GlobalLocalization, WeightsAreExactAgainstGridIntegral) {
       z, mean, se, grid_mean(0), grid_mean(1), grid_mean(2), m(0), m(1), m(2), se_mean(0),
       se_mean(1), se_mean(2), sd(0), sd(1), sd(2));
 }
+
+TEST(GlobalLocalization, WeightsAreExactAgainstGridIntegral) { check_weights_against_grid(0.0); }
+
+TEST(GlobalLocalization, WeightsWithUniformComponentAreExact) { check_weights_against_grid(0.3); }
 
 TEST(GlobalLocalization, SameNumbersForOneAndTwoThreads) {
   const RangeBearingSensor sensor;

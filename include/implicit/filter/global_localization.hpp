@@ -26,9 +26,12 @@
 // exact to round-off; for the narrow components of a localization problem (heading std well
 // below pi) only the shift nearest the component's centre is above round-off.
 //
-// Not covered by the modes: with clutter on, p(z | x) never falls below p0^n (every detection
-// clutter), so t has a floor over the whole box. The weights stay unbiased, but samples in the
-// floor's tails get large weights when that floor holds a noticeable part of Z.
+// Not covered by the modes: with clutter on, each detection's likelihood is at least p0 (ML
+// association at x with S = Sigma2: inside the gate N(e; 0, Sigma2) >= p0), so p(z | x) >= p0^n
+// over the whole box and Z >= p0^n. The weights stay unbiased, but when that floor holds a
+// noticeable part of Z the modes alone almost never sample it and the estimate of Z (and the
+// posterior) misses it. `uniform_fraction` > 0 adds u itself as a defensive component,
+// q' = (1 - eps) q + eps u, which bounds every weight by p(z | x) / eps.
 
 #include <algorithm>
 #include <array>
@@ -366,32 +369,52 @@ std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
 /// component, then three normals. Headings wrapped to [-pi, pi), q summed over the heading's 2 pi
 /// shifts (detail::WrappedMixture). Parallel over particles, bit-identical for any thread count.
 /// Throws InvalidArgument when `modes` is empty (no pose explains the detections).
+///
+/// uniform_fraction eps in [0, 1): the proposal is (1 - eps) q + eps u; a draw whose uniform is
+/// below eps is uniform over the box and headings (three more uniforms). eps = 0 gives the same
+/// draws as the mixture alone.
 template <typename Ctx>
 void sample_pose_mixture(const Ctx& ctx, const std::vector<Laplace<3>>& modes, const PoseBounds& b,
                          std::uint64_t seed, std::uint64_t step, std::span<Pose> particles,
-                         std::span<double> log_weights) {
+                         std::span<double> log_weights, double uniform_fraction = 0.0) {
   require(!modes.empty(),
           "global localization: no pose explains the detections (no minimum of -log p(z | x) was "
           "found inside the bounds; more detections, a finer cover or a larger margin may help)");
   require(particles.size() == log_weights.size(),
           "global localization: expected as many log weights as particles, got {} and {}",
           log_weights.size(), particles.size());
+  require(uniform_fraction >= 0 && uniform_fraction < 1,
+          "global localization: expected a uniform fraction in [0, 1), got {}", uniform_fraction);
+  const double eps = uniform_fraction;
   const double log_u = log_uniform_density(b);
+  const double log_eps_u = std::log(eps) + log_u, log_mix = std::log1p(-eps);
   const MixtureProposal<3> mix(modes);
   const detail::WrappedMixture q(mix);
   parallel_for(particles.size(), [&](std::size_t j) {
     Rng rng({.seed = seed, .step = step, .index = j, .purpose = purpose::kGlobalInit});
     const double u = rng.uniform();
-    const Vec<3> xi = rng.normal_vector<3>();
-    Pose x = mix.components()[mix.choose(u)].map(xi);
-    x(2) = wrap_angle(x(2));
+    Pose x;
+    if (u < eps) {
+      const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();
+      x = Pose(b.x_min + ux * (b.x_max - b.x_min), b.y_min + uy * (b.y_max - b.y_min),
+               -kPi + 2.0 * kPi * uh);
+    } else {
+      const Vec<3> xi = rng.normal_vector<3>();
+      x = mix.components()[mix.choose((u - eps) / (1.0 - eps))].map(xi);  // eps = 0: u itself
+      x(2) = wrap_angle(x(2));
+    }
     particles[j] = x;
     if (!x.allFinite() || !b.contains(x)) {
       log_weights[j] = -std::numeric_limits<double>::infinity();
       return;
     }
     ParticleStats st;
-    log_weights[j] = log_u + detail::sensor_log_likelihood(ctx, x, st) - q.log_density(x);
+    double log_q = log_mix + q.log_density(x);
+    if (eps > 0) {  // log((1 - eps) q + eps u)
+      const double hi = std::max(log_q, log_eps_u), lo = std::min(log_q, log_eps_u);
+      log_q = hi + std::log1p(std::exp(lo - hi));
+    }
+    log_weights[j] = log_u + detail::sensor_log_likelihood(ctx, x, st) - log_q;
   });
 }
 
