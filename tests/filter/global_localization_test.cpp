@@ -179,6 +179,25 @@ TEST(GlobalLocalization, WeightsAreExactAgainstGridIntegral) { check_weights_aga
 
 TEST(GlobalLocalization, WeightsWithUniformComponentAreExact) { check_weights_against_grid(0.3); }
 
+// The wrapped mixture density against the brute-force sum over 101 shifts, for a narrow and a
+// wide (heading std 2.5 rad, correlated with x) component.
+TEST(GlobalLocalization, WrappedDensityMatchesSumOverShifts) {
+  Mat3 h1, h2;
+  h1 << 40.0, 5.0, 3.0, 5.0, 30.0, -2.0, 3.0, -2.0, 400.0;
+  h2 << 2.0, 0.0, 0.3, 0.0, 1.0, 0.0, 0.3, 0.0, 0.2;
+  const Laplace<3> a = Laplace<3>::make(Vec<3>(1.0, 2.0, 3.0), 0.5, h1);
+  const Laplace<3> b = Laplace<3>::make(Vec<3>(1.5, 1.0, -0.5), 1.5, h2);
+  ASSERT_GT(1.0 / b.L(2, 2), 2.0);
+  const MixtureProposal<3> mix({a, b});
+  const detail::WrappedMixture q(mix);
+  for (const Pose& x : {Pose(1.0, 2.0, 3.1), Pose(1.1, 1.9, -3.1), Pose(0.0, 0.0, 0.0),
+                        Pose(2.0, 1.0, -2.5), Pose(1.5, 1.0, 1.0)}) {
+    std::vector<double> terms;
+    for (int n = -50; n <= 50; ++n) terms.push_back(mix.log_density(x + Vec<3>(0, 0, 2 * kPi * n)));
+    EXPECT_NEAR(q.log_density(x), log_sum_exp(terms), 1e-12) << x.transpose();
+  }
+}
+
 TEST(GlobalLocalization, SameNumbersForOneAndTwoThreads) {
   const RangeBearingSensor sensor;
   const auto z = observe(sensor, kSquare, Pose(1.0, 2.0, 0.3), false);
