@@ -34,6 +34,7 @@
 #include "implicit/core/types.hpp"
 #include "implicit/core/version.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/filter/global_localization.hpp"
 #include "implicit/filter/localization.hpp"
 #include "implicit/filter/mcl_objective.hpp"
 #include "implicit/filter/particle_filter.hpp"

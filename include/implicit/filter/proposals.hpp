@@ -134,6 +134,29 @@ int associate(const Ctx& ctx, const Pose& x, const Mat3* pose_cov, const Measure
       .index;
 }
 
+/// log p(z | x) of all detections of ctx at the pose x: maximum-likelihood association at x with
+/// S = Sigma2 (labelled detections keep their landmark), a Gaussian term per associated detection
+/// and log p0 per dropped one when clutter is on. The bootstrap's weight increment, and the target
+/// density of global localization. Counts used and dropped detections in st.
+template <typename Ctx>
+double sensor_log_likelihood(const Ctx& ctx, const Pose& x, ParticleStats& st) {
+  double log_w = 0.0;
+  const double log_norm = -kLog2Pi - 0.5 * ctx.log_det_noise;  // log N(0; 0, Sigma2)
+  for (const LabelledMeasurement& lz : ctx.z) {
+    const int k = lz.landmark >= 0 ? lz.landmark : associate(ctx, x, nullptr, lz.z);
+    if (k < 0) {
+      ++st.dropped;
+      if (ctx.association.clutter) log_w += ctx.log_clutter;
+      continue;
+    }
+    ++st.used;
+    const Measurement e =
+        ctx.sensor->residual(ctx.sensor->predict(x, ctx.map[static_cast<std::size_t>(k)]), lz.z);
+    log_w += log_norm - 0.5 * e.dot(ctx.noise_information * e);
+  }
+  return log_w;
+}
+
 }  // namespace detail
 
 /// Standard MCL: sample the motion model, weight by the sensor likelihood.
@@ -154,20 +177,7 @@ struct BootstrapProposal {
     }
     const Vec<3> xi = rng.normal_vector<3>();  // one call: argument order is unspecified
     next = f + sigma1.matrixL() * xi;
-    double log_w = 0.0;
-    const double log_norm = -kLog2Pi - 0.5 * ctx.log_det_noise;  // log N(0; 0, Sigma2)
-    for (const LabelledMeasurement& lz : ctx.z) {
-      const int k = lz.landmark >= 0 ? lz.landmark : detail::associate(ctx, next, nullptr, lz.z);
-      if (k < 0) {
-        ++st.dropped;
-        if (ctx.association.clutter) log_w += ctx.log_clutter;
-        continue;
-      }
-      ++st.used;
-      const Measurement e = ctx.sensor->residual(
-          ctx.sensor->predict(next, ctx.map[static_cast<std::size_t>(k)]), lz.z);
-      log_w += log_norm - 0.5 * e.dot(ctx.noise_information * e);
-    }
+    const double log_w = detail::sensor_log_likelihood(ctx, next, st);
     if (!std::isfinite(log_w) && log_w != -std::numeric_limits<double>::infinity()) {
       st.failed = true;
       return -std::numeric_limits<double>::infinity();
