@@ -168,8 +168,10 @@ template <typename Ctx>
 bool newton_from_start(const Ctx& ctx, const Pose& x0, const Mat3& cover_cov,
                        const GlobalInitOptions& o, NewtonResult& out, bool& skipped) {
   constexpr std::size_t kMax = MclObjective<typename Ctx::SensorType>::kMaxTerms;
-  const std::size_t n = std::min(ctx.z.size(), kMax);  // more detections than F can hold: the
-  std::array<int, kMax> a{}, b{};                      // extra ones enter as dropped
+  // F holds at most kMax terms: further detections enter phi as clutter (the modes are only a
+  // proposal, so this costs efficiency, never exactness).
+  const std::size_t n = std::min(ctx.z.size(), kMax);
+  std::array<int, kMax> a{}, b{};
   const std::span<int> assoc(a.data(), n), next(b.data(), n);
   Ctx head = ctx;
   head.z = ctx.z.first(n);
