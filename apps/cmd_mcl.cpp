@@ -16,6 +16,63 @@ struct MclCommand {
   bool allow_empty = false;
 };
 
+/// The options of global localization, kidnapping, recovery and KLD-sampling (spec §3.10).
+void add_global_options(CLI::App& sub, MclSettings& s) {
+  sub.add_option("--init", s.init,
+                 "known: start from the log's initial pose; global: no initial pose (run r starts "
+                 "r * span / runs seconds in, at its first scan with >= 2 detections)")
+      ->check(CLI::IsMember({"known", "global"}))
+      ->capture_default_str();
+  sub.add_option("--start-span", s.start_span, "[s] The global starts' spread over the log")
+      ->check(in_range(0.0, 1e6))
+      ->capture_default_str();
+  sub.add_option("--kidnap-at", s.kidnap_at,
+                 "[s] after the first control: drop --kidnap-skip seconds of odometry and scans "
+                 "there, so the filter's pose is wrong without being told")
+      ->check(in_range(0.0, 1e6));
+  sub.add_option("--kidnap-skip", s.kidnap_skip, "[s] Length of the dropped stretch")
+      ->check(in_range(1e-6, 1e6))
+      ->capture_default_str();
+  sub.add_option("--recovery", s.recovery,
+                 "Injection when the filter looks lost: none, uniform (AMCL's source), mixture "
+                 "(over the minima of -log p(z|x)); auto: off for a known start, else uniform for "
+                 "standard and mixture for implicit (also the global start's source)")
+      ->check(CLI::IsMember({"auto", "none", "uniform", "mixture"}))
+      ->capture_default_str();
+  sub.add_option("--recovery-alpha-slow", s.recovery_alpha_slow, "Rate of the slow average")
+      ->check(in_range(1e-9, 1.0))
+      ->capture_default_str();
+  sub.add_option("--recovery-alpha-fast", s.recovery_alpha_fast, "Rate of the fast average")
+      ->check(in_range(1e-9, 1.0))
+      ->capture_default_str();
+  sub.add_option("--kidnap-probability", s.kidnap_probability,
+                 "Prior probability per update that the robot was moved unseen (weights of the "
+                 "injected particles)")
+      ->check(in_range(1e-300, 0.5))
+      ->capture_default_str();
+  sub.add_flag("--kld", s.kld, "Adaptive particle count by KLD-sampling (resamples every update)");
+  sub.add_option("--kld-err", s.kld_err, "KLD-sampling: bound on the K-L divergence")
+      ->check(in_range(1e-6, 1.0))
+      ->capture_default_str();
+  sub.add_option("--kld-z", s.kld_z, "KLD-sampling: upper standard normal quantile")
+      ->check(in_range(0.0, 10.0))
+      ->capture_default_str();
+  sub.add_option("--min-particles", s.min_particles, "KLD-sampling: fewest particles")
+      ->check(in_range(1, 10000000))
+      ->capture_default_str();
+  sub.add_option("--max-particles", s.max_particles,
+                 "KLD-sampling: most particles (and a global start's count)")
+      ->check(in_range(1, 10000000))
+      ->capture_default_str();
+  sub.add_option("--cover-spacing", s.cover_spacing,
+                 "[m] Grid of the multi-start Newton over the map (mixture source)")
+      ->check(in_range(0.05, 100.0))
+      ->capture_default_str();
+  sub.add_option("--cover-headings", s.cover_headings, "Headings per grid point (mixture source)")
+      ->check(in_range(1, 360))
+      ->capture_default_str();
+}
+
 void setup_mcl(CLI::App& sub) {
   auto cmd = std::make_shared<MclCommand>();
   sub.add_option("--method", cmd->settings.method,
@@ -82,13 +139,16 @@ void setup_mcl(CLI::App& sub) {
       ->check(in_range(0.0, 90.0));
   sub.add_flag("--no-clutter{false}", cmd->settings.clutter,
                "Dropped detections contribute nothing (instead of the clutter density p0)");
+  add_global_options(sub, cmd->settings);
   sub.add_flag("--allow-empty", cmd->allow_empty,
                "Exit 0 even when the run scored nothing (no step with truth, no landmark, a "
                "non-finite metric); a warning is printed either way");
   add_common_options(sub, cmd->ctx);
   set_examples(sub, {"implicit mcl --method implicit --particles 100 --runs 20 --json",
                      "implicit mcl --model unicycle --data u.log.gz --method implicit -M 100",
-                     "implicit mcl --method standard --particles 300 --config B --out out/mcl"});
+                     "implicit mcl --method standard --particles 300 --config B --out out/mcl",
+                     "implicit mcl --init global --method implicit -M 200 --runs 20 --json",
+                     "implicit mcl --kidnap-at 60 --kidnap-skip 10 --method standard --kld"});
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     const auto r = run_mcl(cmd->settings, cmd->ctx);
@@ -97,7 +157,20 @@ void setup_mcl(CLI::App& sub) {
     };
     if (cmd->ctx.json) {
       print_json(r);
-      check();
+      if (!r.contains("global_success_rate") && !r.contains("kidnap_recovery_rate")) check();
+      return;
+    }
+    if (r.contains("global_success_rate") || r.contains("kidnap_recovery_rate")) {
+      const bool kidnap = r.contains("kidnap_recovery_rate");
+      fmt::print(
+          "MCL {} {} M = {}, {} runs: {} rate {:.2f}, median time {:.1f} s, particles {:.0f} "
+          "(peak {:.0f}), {:.4f} ms per step\n",
+          kidnap ? "kidnapping" : "global start", r["method"].get<std::string>(),
+          r["particles"].get<int>(), r["runs"].get<int>(), kidnap ? "recovery" : "success",
+          r[kidnap ? "kidnap_recovery_rate" : "global_success_rate"].get<double>(),
+          r[kidnap ? "recovery_time_s_median" : "time_to_converge_s_median"].get<double>(),
+          r["particles_mean"].get<double>(), r["particles_peak"].get<double>(),
+          r["cpu_ms_per_step"].get<double>());
       return;
     }
     fmt::print(

@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "exp_mcl_global.hpp"
 #include "experiments.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
@@ -255,6 +256,8 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
     }
     reference_vs_gps = n > 0 ? std::sqrt(sum / n) : 0.0;
   }
+
+  if (s.init != "known" || s.kidnap_at >= 0) return run_mcl_global(s, ctx, model, sensor, problem);
 
   filter::FilterOptions options;
   options.particles = static_cast<std::size_t>(s.particles);

@@ -58,6 +58,22 @@ struct MclSettings {
   std::vector<double> state_sd;     ///< motion noise sd of x, y, heading; empty: default
   double range_sd = 0.0;            ///< sensor range sd [m]; 0: Table 7 per --sigma2
   double bearing_sd_deg = 0.0;      ///< sensor bearing sd [deg]; 0: Table 7 per --sigma2
+  // Global localization, kidnapping, recovery and KLD-sampling (spec §3.10).
+  std::string init = "known";     ///< "known" (the log's initial pose) or "global"
+  double start_span = 60.0;       ///< [s] global starts: run r starts r * span / runs in
+  double kidnap_at = -1.0;        ///< [s] after the first control; < 0: no kidnapping
+  double kidnap_skip = 10.0;      ///< [s] of odometry and scans dropped at kidnap_at
+  std::string recovery = "auto";  ///< none | uniform | mixture | auto (global/kidnap: by method)
+  double recovery_alpha_slow = 0.001;
+  double recovery_alpha_fast = 0.1;
+  double kidnap_probability = 1e-3;
+  bool kld = false;  ///< adaptive particle count
+  double kld_err = 0.01;
+  double kld_z = 0.99;
+  int min_particles = 100;
+  int max_particles = 5000;
+  double cover_spacing = 2.0;  ///< [m] of the multi-start's grid
+  int cover_headings = 8;
 };
 /// Keys: method, particles, runs, config, error_percent_mean/std/median, rmse_m,
 /// heading_rmse_rad, ess_mean, cpu_ms_per_step, detections_used, detections_dropped, lost_runs,

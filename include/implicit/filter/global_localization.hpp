@@ -365,58 +365,83 @@ std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
   return modes;
 }
 
-/// Draws particles from the mixture over `modes` (pi_k as in MixtureProposal) with log weights
-/// log u(x) + detail::sensor_log_likelihood(ctx, x) - log q(x) (not normalised; -inf outside the
-/// box). Particle j uses Rng({seed, step, j, purpose::kGlobalInit}): one uniform picks the
-/// component, then three normals. Headings wrapped to [-pi, pi), q summed over the heading's 2 pi
-/// shifts (detail::WrappedMixture). Parallel over particles, bit-identical for any thread count.
-/// Throws InvalidArgument when `modes` is empty (no pose explains the detections).
-///
-/// uniform_fraction eps in [0, 1): the proposal is (1 - eps) q + eps u; a draw whose uniform is
-/// below eps is uniform over the box and headings (three more uniforms). eps = 0 gives the same
-/// draws as the mixture alone.
+/// A pose uniform over the box and all headings, from three uniforms of rng.
+inline Pose uniform_pose(const PoseBounds& b, Rng& rng) {
+  const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();
+  return Pose(b.x_min + ux * (b.x_max - b.x_min), b.y_min + uy * (b.y_max - b.y_min),
+              -kPi + 2.0 * kPi * uh);
+}
+
+/// One draw at a time from the mixture over `modes` (pi_k as in MixtureProposal), optionally
+/// defensive: the proposal is (1 - eps) q + eps u, eps = uniform_fraction in [0, 1). A draw takes
+/// one uniform u0 from its stream: u0 < eps gives a uniform pose (three more uniforms), else the
+/// component choice (u0 - eps) / (1 - eps) and three normals. Its log weight is
+/// log u(x) + detail::sensor_log_likelihood(ctx, x) - log proposal(x) (-inf outside the box), with
+/// q summed over the heading's 2 pi shifts (detail::WrappedMixture). Throws InvalidArgument when
+/// `modes` is empty (no pose explains the detections).
+class PoseMixtureSampler {
+ public:
+  PoseMixtureSampler(std::vector<Laplace<3>> modes, const PoseBounds& b,
+                     double uniform_fraction = 0.0)
+      : mix_(checked(std::move(modes))),
+        q_(mix_),
+        bounds_(b),
+        eps_(uniform_fraction),
+        log_u_(log_uniform_density(b)) {
+    require(uniform_fraction >= 0 && uniform_fraction < 1,
+            "global localization: expected a uniform fraction in [0, 1), got {}", uniform_fraction);
+    log_eps_u_ = std::log(eps_) + log_u_;
+    log_mix_ = std::log1p(-eps_);
+  }
+
+  template <typename Ctx>
+  double draw(const Ctx& ctx, Rng& rng, Pose& x) const {
+    const double u = rng.uniform();
+    if (u < eps_) {
+      x = uniform_pose(bounds_, rng);
+    } else {
+      const Vec<3> xi = rng.normal_vector<3>();
+      x = mix_.components()[mix_.choose((u - eps_) / (1.0 - eps_))].map(xi);  // eps = 0: u
+      x(2) = wrap_angle(x(2));
+    }
+    if (!x.allFinite() || !bounds_.contains(x)) return -std::numeric_limits<double>::infinity();
+    ParticleStats st;
+    double log_q = log_mix_ + q_.log_density(x);
+    if (eps_ > 0) {  // log((1 - eps) q + eps u)
+      const double hi = std::max(log_q, log_eps_u_), lo = std::min(log_q, log_eps_u_);
+      log_q = hi + std::log1p(std::exp(lo - hi));
+    }
+    return log_u_ + detail::sensor_log_likelihood(ctx, x, st) - log_q;
+  }
+
+ private:
+  static std::vector<Laplace<3>> checked(std::vector<Laplace<3>> modes) {
+    require(!modes.empty(),
+            "global localization: no pose explains the detections (no minimum of -log p(z | x) "
+            "was found inside the bounds; more detections, a finer cover or a larger margin may "
+            "help)");
+    return modes;
+  }
+
+  MixtureProposal<3> mix_;
+  detail::WrappedMixture q_;
+  PoseBounds bounds_;
+  double eps_, log_u_, log_eps_u_ = 0.0, log_mix_ = 0.0;
+};
+
+/// Draws particles with PoseMixtureSampler; particle j uses Rng({seed, step, j,
+/// purpose::kGlobalInit}). Parallel over particles, bit-identical for any thread count.
 template <typename Ctx>
 void sample_pose_mixture(const Ctx& ctx, const std::vector<Laplace<3>>& modes, const PoseBounds& b,
                          std::uint64_t seed, std::uint64_t step, std::span<Pose> particles,
                          std::span<double> log_weights, double uniform_fraction = 0.0) {
-  require(!modes.empty(),
-          "global localization: no pose explains the detections (no minimum of -log p(z | x) was "
-          "found inside the bounds; more detections, a finer cover or a larger margin may help)");
   require(particles.size() == log_weights.size(),
           "global localization: expected as many log weights as particles, got {} and {}",
           log_weights.size(), particles.size());
-  require(uniform_fraction >= 0 && uniform_fraction < 1,
-          "global localization: expected a uniform fraction in [0, 1), got {}", uniform_fraction);
-  const double eps = uniform_fraction;
-  const double log_u = log_uniform_density(b);
-  const double log_eps_u = std::log(eps) + log_u, log_mix = std::log1p(-eps);
-  const MixtureProposal<3> mix(modes);
-  const detail::WrappedMixture q(mix);
+  const PoseMixtureSampler sampler(modes, b, uniform_fraction);
   parallel_for(particles.size(), [&](std::size_t j) {
     Rng rng({.seed = seed, .step = step, .index = j, .purpose = purpose::kGlobalInit});
-    const double u = rng.uniform();
-    Pose x;
-    if (u < eps) {
-      const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();
-      x = Pose(b.x_min + ux * (b.x_max - b.x_min), b.y_min + uy * (b.y_max - b.y_min),
-               -kPi + 2.0 * kPi * uh);
-    } else {
-      const Vec<3> xi = rng.normal_vector<3>();
-      x = mix.components()[mix.choose((u - eps) / (1.0 - eps))].map(xi);  // eps = 0: u itself
-      x(2) = wrap_angle(x(2));
-    }
-    particles[j] = x;
-    if (!x.allFinite() || !b.contains(x)) {
-      log_weights[j] = -std::numeric_limits<double>::infinity();
-      return;
-    }
-    ParticleStats st;
-    double log_q = log_mix + q.log_density(x);
-    if (eps > 0) {  // log((1 - eps) q + eps u)
-      const double hi = std::max(log_q, log_eps_u), lo = std::min(log_q, log_eps_u);
-      log_q = hi + std::log1p(std::exp(lo - hi));
-    }
-    log_weights[j] = log_u + detail::sensor_log_likelihood(ctx, x, st) - log_q;
+    log_weights[j] = sampler.draw(ctx, rng, particles[j]);
   });
 }
 
@@ -429,9 +454,7 @@ inline void sample_uniform_poses(const PoseBounds& b, std::uint64_t seed,
           b.x_min, b.x_max, b.y_min, b.y_max);
   parallel_for(particles.size(), [&](std::size_t j) {
     Rng rng({.seed = seed, .step = 0, .index = j, .purpose = purpose::kGlobalInit});
-    const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();
-    particles[j] = Pose(b.x_min + ux * (b.x_max - b.x_min), b.y_min + uy * (b.y_max - b.y_min),
-                        -kPi + 2.0 * kPi * uh);
+    particles[j] = uniform_pose(b, rng);
   });
 }
 

@@ -51,7 +51,9 @@ LocalizationProblem without_steps(const LocalizationProblem& problem, double fro
 
 struct LocalizationRun {
   std::vector<StepSummary> steps;
-  double seconds = 0.0;      ///< wall time of the filter loop (initialisation excluded)
+  std::size_t first_step = 0;  ///< the problem's step of steps[0] (a run may start later)
+  bool uniform_start = false;  ///< a global start's mixture found no pose: uniform cloud instead
+  double seconds = 0.0;        ///< wall time of the filter loop (initialisation excluded)
   double cpu_seconds = 0.0;  ///< process CPU time of the loop (all threads; = wall when idle-free)
   int resamplings = 0;
 };
