@@ -115,8 +115,8 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
             ? filter::run_global_localization(problem, model, sensor, implicit_proposal, o, gr)
             : filter::run_global_localization(problem, model, sensor, filter::BootstrapProposal{},
                                               o, gr);
-    const double from =
-        kidnap ? t0 + s.kidnap_at + s.kidnap_skip : problem.schedule.steps[run.first_step].time;
+    // The clock starts at the nominal start (a run that waits for a usable scan pays for it).
+    const double from = kidnap ? t0 + s.kidnap_at + s.kidnap_skip : std::max(gr.start_time, t0);
     const filter::GlobalMetrics m = filter::global_metrics(run, problem, from);
     bar.tick();
     const auto steps = static_cast<double>(run.steps.size());

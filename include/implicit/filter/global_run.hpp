@@ -8,7 +8,7 @@
 //   GlobalMetrics m = global_metrics(run, problem, GlobalCriteria{});
 //
 // The run starts at the first step (at or after start_time) whose scan has at least
-// g.init.min_detections detections: its particles are an exact importance sample of
+// g.init.min_detections detections (the mixture: and an isolated minimum of -log p(z | x)): its particles are an exact importance sample of
 // u(x) p(z | x), u uniform over the map's bounds and all headings, drawn either from u itself
 // (the bootstrap's uniform cloud, weighted by the likelihood) or from the mixture over the minima
 // of F(x) = -log p(z | x) (global_localization.hpp). From the next step on it is the usual filter.
@@ -99,20 +99,29 @@ LocalizationRun run_global_localization(const LocalizationProblem& problem, cons
     pf.set_recovery_source(
         std::make_shared<PoseRecoverySource<Ctx>>(g.source, bounds, g.init, g.uniform_fraction));
   LocalizationRun run;
-  run.first_step = first;
-  run.steps.reserve(steps - first);
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = process_cpu_seconds();
+  std::vector<Laplace<3>> modes;
+  if (g.global_start && g.source == GlobalSource::kMixture) {
+    // The mixture waits for the first scan with an isolated minimum (with two detections, one
+    // of them clutter, there may be none); the run's clock starts at start_time all the same.
+    for (std::size_t n = first; n < steps && modes.empty(); ++n) {
+      if (problem.detections[n].size() < static_cast<std::size_t>(g.init.min_detections))
+        continue;
+      modes = find_pose_modes(pf.context(problem.detections[n]), bounds, g.init);
+      if (!modes.empty()) first = n;
+    }
+  }
+  run.first_step = first;
+  run.steps.reserve(steps - first);
   if (g.global_start) {
     // The first scan's particles: an importance sample of u(x) p(z | x).
     const Ctx ctx = pf.context(problem.detections[first]);
     std::vector<Pose> x(options.particles);
     std::vector<double> lw(options.particles);
-    std::vector<Laplace<3>> modes;
-    if (g.source == GlobalSource::kMixture) modes = find_pose_modes(ctx, bounds, g.init);
     if (modes.empty()) {
-      // The uniform cloud; also the mixture's fallback when no pose explains the detections
-      // (e.g. one of two detections is clutter): still an exact sample, only a less efficient one.
+      // The uniform cloud; also the mixture's fallback when no scan of the log has an isolated
+      // minimum: still an exact sample, only a less efficient one.
       run.uniform_start = g.source == GlobalSource::kMixture;
       sample_uniform_poses(bounds, options.seed, x);
       parallel_for(x.size(), [&](std::size_t j) {
