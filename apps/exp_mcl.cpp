@@ -258,6 +258,9 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   }
 
   if (s.init != "known" || s.kidnap_at >= 0) return run_mcl_global(s, ctx, model, sensor, problem);
+  require(!s.kld && (s.recovery == "auto" || s.recovery == "none"),
+          "mcl --kld / --recovery: expected --init global or --kidnap-at with them (they act only "
+          "on global-start and kidnapping runs)");
 
   filter::FilterOptions options;
   options.particles = static_cast<std::size_t>(s.particles);

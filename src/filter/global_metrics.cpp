@@ -1,4 +1,4 @@
-// Metrics of global localization and kidnapping runs (spec §3.10).
+// Metrics of global localization and kidnapping runs (spec §3.11).
 #include <algorithm>
 #include <cmath>
 

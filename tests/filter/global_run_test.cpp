@@ -1,4 +1,4 @@
-// Global localization runs, kidnapping and recovery (spec §3.10): without_steps removes exactly a
+// Global localization runs, kidnapping and recovery (spec §3.11): without_steps removes exactly a
 // stretch of the log, global_metrics against hand-computed values, global starts from both sources
 // converge on a simulated log with an asymmetric map (and are the same for 1 and 2 threads), a
 // kidnapped filter finds the robot again only with recovery, and a global start on a symmetric

@@ -1,4 +1,4 @@
-// Recovery of a lost filter (spec §3.10): the injection probability follows augmented MCL's
+// Recovery of a lost filter (spec §3.11): the injection probability follows augmented MCL's
 // formula on the per-detection likelihood, injected particles get the extended-space weights
 // log(eps / p) + (the source's value) and the others log((1 - eps) / (1 - p)), the injected count
 // is binomial(M, p), a filter whose averages never drop is bit-identical to one without recovery,

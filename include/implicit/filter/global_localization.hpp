@@ -1,5 +1,6 @@
 #pragma once
-// Global localization: particles for the first detections when the initial pose is unknown.
+// Global localization (spec §3.11): particles for the first detections when the initial pose is
+// unknown.
 //
 // The target is t(x) = u(x) p(z | x) over poses x = (x, y, heading), with u uniform over the
 // landmarks' bounding box grown by a margin and over all headings, and p(z | x) the likelihood of

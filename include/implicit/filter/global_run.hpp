@@ -1,5 +1,5 @@
 #pragma once
-// Localization without a known start pose, and recovery after kidnapping (spec §3.10).
+// Localization without a known start pose, and recovery after kidnapping (spec §3.11).
 //
 //   GlobalOptions g;                       // source: kMixture (implicit) or kUniform (bootstrap)
 //   g.start_time = 20.0;                   // ignore the data before
@@ -149,7 +149,7 @@ LocalizationRun run_global_localization(const LocalizationProblem& problem, cons
   return run;
 }
 
-/// When a run counts as localized (spec §3.10).
+/// When a run counts as localized (spec §3.11).
 struct GlobalCriteria {
   double threshold = 1.0;  ///< [m] position error
   double settle = 30.0;    ///< [s] after the start (or the end of a kidnapping gap)

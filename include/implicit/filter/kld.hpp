@@ -12,7 +12,7 @@
 //   // the next cloud is particles[ancestors[i]], i < ancestors.size()
 //
 // The option names and meanings follow ROS AMCL (kld_err, kld_z, min/max_particles), so a tuned
-// AMCL configuration carries over.
+// AMCL configuration carries over. The bound and the stopping rule: spec §3.11.
 
 #include <algorithm>
 #include <cmath>

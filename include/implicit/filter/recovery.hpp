@@ -1,5 +1,5 @@
 #pragma once
-// Recovery of a lost localization filter (spec §3.10): a "lost" signal from the likelihood of the
+// Recovery of a lost localization filter (spec §3.11): a "lost" signal from the likelihood of the
 // data, and the fraction of particles to draw from a recovery source instead of the motion model.
 //
 // The signal is augmented MCL's (Thrun, Burgard & Fox, Probabilistic Robotics, Table 8.3): two
