@@ -132,18 +132,12 @@ LocalizationRun run_global_localization(const LocalizationProblem& problem, cons
       sample_pose_mixture(ctx, modes, bounds, options.seed, first, x, lw, g.uniform_fraction);
     }
     pf.initialize(x, lw);
+    run.steps.push_back(pf.last());  // the first scan's particles are its summary
+    ++first;
   } else {
     pf.initialize(problem.initial_mean, problem.initial_covariance);
-    if (!problem.step_dt.empty()) pf.set_step_length(problem.step_dt[first]);
-    pf.step(problem.schedule.steps[first].u, problem.detections[first]);
   }
-  run.steps.push_back(pf.last());
-  run.resamplings += pf.last().resampled ? 1 : 0;
-  for (std::size_t n = first + 1; n < steps; ++n) {
-    if (!problem.step_dt.empty()) pf.set_step_length(problem.step_dt[n]);
-    run.steps.push_back(pf.step(problem.schedule.steps[n].u, problem.detections[n]));
-    run.resamplings += run.steps.back().resampled ? 1 : 0;
-  }
+  detail::step_through(pf, problem, first, run);
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.cpu_seconds = process_cpu_seconds() - cpu_start;
   return run;

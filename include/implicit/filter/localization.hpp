@@ -72,6 +72,22 @@ inline double process_cpu_seconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
+namespace detail {
+
+/// Steps `pf` through the problem's steps from `first` on, each with its own length, recording
+/// every summary in `run`.
+template <typename Filter>
+void step_through(Filter& pf, const LocalizationProblem& problem, std::size_t first,
+                  LocalizationRun& run) {
+  for (std::size_t n = first; n < problem.schedule.steps.size(); ++n) {
+    if (!problem.step_dt.empty()) pf.set_step_length(problem.step_dt[n]);
+    run.steps.push_back(pf.step(problem.schedule.steps[n].u, problem.detections[n]));
+    run.resamplings += run.steps.back().resampled ? 1 : 0;
+  }
+}
+
+}  // namespace detail
+
 template <robot::MotionModel Motion, robot::LandmarkSensor Sensor, typename Proposal>
 LocalizationRun run_localization(const LocalizationProblem& problem, const Motion& motion,
                                  const Sensor& sensor, const Proposal& proposal,
@@ -82,11 +98,7 @@ LocalizationRun run_localization(const LocalizationProblem& problem, const Motio
   run.steps.reserve(problem.schedule.steps.size());
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = process_cpu_seconds();
-  for (std::size_t n = 0; n < problem.schedule.steps.size(); ++n) {
-    if (!problem.step_dt.empty()) pf.set_step_length(problem.step_dt[n]);
-    run.steps.push_back(pf.step(problem.schedule.steps[n].u, problem.detections[n]));
-    run.resamplings += run.steps.back().resampled ? 1 : 0;
-  }
+  detail::step_through(pf, problem, 0, run);
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.cpu_seconds = process_cpu_seconds() - cpu_start;
   return run;
