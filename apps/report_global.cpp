@@ -88,7 +88,8 @@ void global_localization_section(Document& doc, const json& results, const Numbe
   figure(doc, results, 9,
          "Position error against time of the first runs of implicit (left) and standard (right) "
          "MCL from a global start (top) and after a kidnapping (bottom), log scale; the dashed "
-         "line is the 1 m threshold, dotted lines mark the runs' starts.");
+         "line is the 1 m threshold; dotted lines mark where the clock starts (the global start, or the "
+         "end of the dropped stretch).");
   settings_list(doc, results, "global_localization");
 }
 

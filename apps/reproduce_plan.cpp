@@ -85,10 +85,10 @@ void add_global_localization(Plan& plan, bool quick) {
                     {"particles", st.particles},
                     {"runs", runs}});
     const bool figure = st.particles == (st.method == "implicit" ? large_implicit : large_standard);
-    // Seconds on one core per run: the log's length over the step cost (implicit M about 6x a
-    // standard particle); a quick run covers 40 s of the log instead of its whole.
-    const double per_run = (quick ? 0.1 : 1.0) *
-                           (0.5 + 0.004 * st.particles * (st.method == "implicit" ? 6.0 : 1.0));
+    // Seconds on one core per run over the whole log (about 125 s; measured: implicit M = 200
+    // 0.8 s, standard M = 1000 1.6 s); a quick run covers 40 s of it.
+    const double per_run = (quick ? duration / 125.0 : 1.0) *
+                           (0.3 + st.particles * (st.method == "implicit" ? 0.004 : 0.0015));
     plan.configs.push_back(
         {"global_localization",
          fmt::format("mcl {} {} M={}", st.kidnap ? "kidnap" : "global", st.method, st.particles),
