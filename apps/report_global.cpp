@@ -42,8 +42,7 @@ Table study_table(const json& results, bool kidnap) {
     const std::string method = s.value("method", std::string("?"));
     const std::string m = std::to_string(s.value("particles", 0));
     if (!ok(&run)) {
-      t.rows.push_back({method, m, "—", cell(&run, [](const json&) { return ""; }), "—", "—",
-                        "—"});
+      t.rows.push_back({method, m, "—", cell(&run, [](const json&) { return ""; }), "—", "—", "—"});
       continue;
     }
     const json& r = run.at("result");
@@ -88,7 +87,8 @@ void global_localization_section(Document& doc, const json& results, const Numbe
   figure(doc, results, 9,
          "Position error against time of the first runs of implicit (left) and standard (right) "
          "MCL from a global start (top) and after a kidnapping (bottom), log scale; the dashed "
-         "line is the 1 m threshold; dotted lines mark where the clock starts (the global start, or the "
+         "line is the 1 m threshold; dotted lines mark where the clock starts (the global start, "
+         "or the "
          "end of the dropped stretch).");
   settings_list(doc, results, "global_localization");
 }

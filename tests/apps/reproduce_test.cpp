@@ -31,8 +31,8 @@ bool require_all() {
 
 // Which figures and table files each experiment produces.
 const std::map<std::string, std::vector<int>> kFigures = {
-    {"slit", {1, 2}}, {"arm", {4}},  {"himmelblau", {5}}, {"mcl", {6}}, {"slam", {7}},
-    {"global_localization", {9}}};
+    {"slit", {1, 2}}, {"arm", {4}},  {"himmelblau", {5}},
+    {"mcl", {6}},     {"slam", {7}}, {"global_localization", {9}}};
 const std::map<std::string, std::string> kTables = {{"slit", "table2_slit.csv"},
                                                     {"himmelblau", "table4_himmelblau.csv"},
                                                     {"mcl", "table5_mcl.csv"},
