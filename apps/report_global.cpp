@@ -23,8 +23,9 @@ std::string rate_cell(const json& r, const std::string& key) {
 
 std::string number_cell(const json& r, const std::string& key, int digits) {
   const auto& v = get(r, key);
-  // A median over no converged run is NaN, stored as null.
-  return v.is_number() ? fmt::format("{:.{}f}", v.get<double>(), digits) : "—";
+  // A median over no converged run is NaN (null once results.json is read back).
+  if (!v.is_number() || !std::isfinite(v.get<double>())) return "—";
+  return fmt::format("{:.{}f}", v.get<double>(), digits);
 }
 
 Table study_table(const json& results, bool kidnap) {
