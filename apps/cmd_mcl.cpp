@@ -26,6 +26,11 @@ void add_global_options(CLI::App& sub, MclSettings& s) {
   sub.add_option("--start-span", s.start_span, "[s] The global starts' spread over the log")
       ->check(in_range(0.0, 1e6))
       ->capture_default_str();
+  sub.add_option("--duration", s.duration,
+                 "[s] Global and kidnapping runs use the log up to this long after the first "
+                 "control (all runs end together); 0: to the end of the log")
+      ->check(in_range(0.0, 1e6))
+      ->capture_default_str();
   sub.add_option("--kidnap-at", s.kidnap_at,
                  "[s] after the first control: drop --kidnap-skip seconds of odometry and scans "
                  "there, so the filter's pose is wrong without being told")

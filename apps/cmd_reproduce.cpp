@@ -38,8 +38,8 @@ namespace {
 
 using nlohmann::json;
 
-const std::vector<std::string> kExperiments = {"slit", "arm",  "himmelblau",
-                                               "mcl",  "slam", "proposal_gain"};
+const std::vector<std::string> kExperiments = {"slit", "arm",           "himmelblau",         "mcl",
+                                               "slam", "proposal_gain", "global_localization"};
 
 struct ReproduceOptions {
   bool quick = false;
@@ -158,9 +158,9 @@ struct FigureSpec {
   int number;
   std::string experiment;
 };
-const std::vector<FigureSpec> kFigures = {{1, "slit"},         {2, "slit"}, {4, "arm"},
-                                          {5, "himmelblau"},   {6, "mcl"},  {7, "slam"},
-                                          {8, "proposal_gain"}};
+const std::vector<FigureSpec> kFigures = {
+    {1, "slit"}, {2, "slit"}, {4, "arm"},           {5, "himmelblau"},
+    {6, "mcl"},  {7, "slam"}, {8, "proposal_gain"}, {9, "global_localization"}};
 
 // The plot scripts: $IMPLICIT_PLOTS_DIR, else <prefix>/share/implicit/plots of the install (or the
 // build tree's link to python/plots). Empty, with the reason in `error`, when there are none: the

@@ -24,6 +24,7 @@
 #include "implicit/robot/csv_table.hpp"
 #include "parallel_runs.hpp"
 #include "vehicle.hpp"
+#include "wilson.hpp"
 
 namespace implicit::app {
 namespace {
@@ -407,15 +408,10 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   j["scans_with_detections"] = problem.schedule.scans_with_observations;
   j["steps"] = problem.schedule.steps.size();
   j["lost_runs"] = lost;
-  // Wilson 95 % interval of the lost fraction: with 20 runs a count is a coarse binomial sample
-  // (2 of 20 and 6 of 20 are both compatible with a 15 % rate), so compare intervals, not counts.
+  // Wilson 95 % interval of the lost fraction (wilson.hpp): compare intervals, not counts.
   {
-    const double n = static_cast<double>(s.runs), z = 1.959963984540054, z2 = z * z;
-    const double phat = lost / n;
-    const double centre = (phat + z2 / (2.0 * n)) / (1.0 + z2 / n);
-    const double half =
-        z * std::sqrt(phat * (1.0 - phat) / n + z2 / (4.0 * n * n)) / (1.0 + z2 / n);
-    j["lost_fraction_ci95"] = {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+    const auto ci = wilson95(lost, static_cast<double>(s.runs));
+    j["lost_fraction_ci95"] = {ci[0], ci[1]};
   }
   j["max_error_m_runs"] = max_err;
   j["cholesky_fallbacks"] = fallbacks;

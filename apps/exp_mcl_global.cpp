@@ -2,14 +2,18 @@
 // and `implicit mcl --kidnap-at T --kidnap-skip D`, with recovery and KLD-sampling.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "context.hpp"
 #include "exp_mcl_global.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/filter/global_run.hpp"
@@ -54,6 +58,28 @@ filter::GlobalSource source_of(const MclSettings& s) {
   return s.method == "implicit" ? filter::GlobalSource::kMixture : filter::GlobalSource::kUniform;
 }
 
+/// Per step with truth, the position error of the first `count` runs (Figure 9's data): time
+/// relative to the log's first control t0, the run's start (from t0) and its particle count.
+using RunNumber = std::function<std::pair<filter::LocalizationRun, double>(std::size_t)>;
+void write_errors(const std::filesystem::path& file, const filter::LocalizationProblem& problem,
+                  double t0, std::size_t count, const RunNumber& run_number) {
+  OutputFile out(file);
+  out.print("run,start_s,time_s,error_m,particles\n");
+  const auto& steps = problem.schedule.steps;
+  for (std::size_t r = 0; r < count; ++r) {
+    const auto [run, from] = run_number(r);
+    for (std::size_t k = 0; k < run.steps.size(); ++k) {
+      const std::size_t step = run.first_step + k;
+      const Vec<2>& truth = problem.truth.position[step];
+      if (!truth.allFinite()) continue;
+      const double e = (run.steps[k].mean.head<2>() - truth).norm();
+      out.print("{},{:.3f},{:.3f},{:.6g},{}\n", r, from - t0, steps[step].time - t0, e,
+                run.steps[k].particles);
+    }
+  }
+  out.commit();
+}
+
 template <typename Motion>
 nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Motion& model,
                           const robot::RangeBearingSensor& sensor,
@@ -61,10 +87,15 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
   check_settings(s);
   const bool kidnap = s.kidnap_at >= 0;
   const double t0 = full.schedule.steps.front().time;
+  // --duration: every run ends at t0 + duration (measured from the first control, not from a
+  // run's start), so the runs of a study see the same end of the log.
+  const filter::LocalizationProblem cut =
+      s.duration > 0
+          ? filter::without_steps(full, t0 + s.duration, std::numeric_limits<double>::infinity())
+          : full;
   // Kidnapping: the steps of [T, T + D) are never seen (filter/localization.hpp, without_steps).
   const filter::LocalizationProblem problem =
-      kidnap ? filter::without_steps(full, t0 + s.kidnap_at, t0 + s.kidnap_at + s.kidnap_skip)
-             : full;
+      kidnap ? filter::without_steps(cut, t0 + s.kidnap_at, t0 + s.kidnap_at + s.kidnap_skip) : cut;
   filter::FilterOptions options;
   options.particles = static_cast<std::size_t>(s.particles);
   options.association.clutter = s.clutter;
@@ -91,32 +122,37 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
 
   const auto runs = static_cast<std::size_t>(s.runs);
   const std::string settings = fmt::format(
-      "global seed={} method={} M={} init={} span={:a} kidnap_at={:a} skip={:a} recovery={} "
-      "slow={:a} fast={:a} eps={:a} kld={} err={:a} z={:a} min={} max={} cover={:a}/{} map={} "
-      "clutter={} data={} config={} p={:a} q={:a} control_sd={:a} state_sd={:a} sigma2={} "
-      "range_sd={:a} bearing_sd={:a}",
-      ctx.seed, s.method, s.particles, s.init, s.start_span, s.kidnap_at, s.kidnap_skip, s.recovery,
-      s.recovery_alpha_slow, s.recovery_alpha_fast, s.kidnap_probability, s.kld, s.kld_err, s.kld_z,
-      s.min_particles, s.max_particles, s.cover_spacing, s.cover_headings, s.map, s.clutter,
-      s.data_dir, s.config, s.p, s.q, fmt::join(s.control_sd, ","), fmt::join(s.state_sd, ","),
-      s.sigma2, s.range_sd, s.bearing_sd_deg);
+      "global seed={} method={} M={} init={} span={:a} duration={:a} kidnap_at={:a} skip={:a} "
+      "recovery={} slow={:a} fast={:a} eps={:a} kld={} err={:a} z={:a} min={} max={} "
+      "cover={:a}/{} map={} clutter={} data={} config={} p={:a} q={:a} control_sd={:a} "
+      "state_sd={:a} sigma2={} range_sd={:a} bearing_sd={:a}",
+      ctx.seed, s.method, s.particles, s.init, s.start_span, s.duration, s.kidnap_at, s.kidnap_skip,
+      s.recovery, s.recovery_alpha_slow, s.recovery_alpha_fast, s.kidnap_probability, s.kld,
+      s.kld_err, s.kld_z, s.min_particles, s.max_particles, s.cover_spacing, s.cover_headings,
+      s.map, s.clutter, s.data_dir, s.config, s.p, s.q, fmt::join(s.control_sd, ","),
+      fmt::join(s.state_sd, ","), s.sigma2, s.range_sd, s.bearing_sd_deg);
   Progress bar(fmt::format("mcl {} {} M={}", s.init == "global" ? "global" : "kidnap", s.method,
                            s.particles),
                runs, ctx.show_progress());
-  const auto records = distribute_runs(ctx, "mcl-global", settings, runs, [&](std::size_t r) {
+  // Run r: its seed and start depend only on r, so any rank (or the CSV writer) can redo it.
+  const auto run_number = [&](std::size_t r) {
     filter::FilterOptions o = options;
     o.seed = ctx.seed * static_cast<std::uint64_t>(runs) + static_cast<std::uint64_t>(r);
     filter::GlobalOptions gr = g;
     // Run r starts r * span / runs seconds in: start times and seeds differ together.
     if (g.global_start)
       gr.start_time = t0 + s.start_span * static_cast<double>(r) / static_cast<double>(runs);
-    const filter::LocalizationRun run =
+    filter::LocalizationRun run =
         s.method == "implicit"
             ? filter::run_global_localization(problem, model, sensor, implicit_proposal, o, gr)
             : filter::run_global_localization(problem, model, sensor, filter::BootstrapProposal{},
                                               o, gr);
     // The clock starts at the nominal start (a run that waits for a usable scan pays for it).
     const double from = kidnap ? t0 + s.kidnap_at + s.kidnap_skip : std::max(gr.start_time, t0);
+    return std::make_pair(std::move(run), from);
+  };
+  const auto records = distribute_runs(ctx, "mcl-global", settings, runs, [&](std::size_t r) {
+    const auto [run, from] = run_number(r);
     const filter::GlobalMetrics m = filter::global_metrics(run, problem, from);
     bar.tick();
     const auto steps = static_cast<double>(run.steps.size());
@@ -131,6 +167,11 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
                      run.uniform_start ? 1.0 : 0.0};
   });
   bar.finish();
+  // Only rank 0 writes (parallel_runs.hpp); the first few runs are redone for their error traces.
+  if (!ctx.out_dir.empty() && rank_index() == 0)
+    write_errors(ctx.csv_path(fmt::format("mcl_{}_{}_M{}_errors.csv", kidnap ? "kidnap" : "global",
+                                          s.method, s.particles)),
+                 problem, t0, std::min<std::size_t>(runs, 5), run_number);
   std::vector<double> success, converge, rmse, pmean, ppeak, injected, cpu, start;
   int uniform_starts = 0;
   for (const auto& v : records) {

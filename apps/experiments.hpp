@@ -61,6 +61,7 @@ struct MclSettings {
   // Global localization, kidnapping, recovery and KLD-sampling (spec §3.10).
   std::string init = "known";     ///< "known" (the log's initial pose) or "global"
   double start_span = 60.0;       ///< [s] global starts: run r starts r * span / runs in
+  double duration = 0.0;          ///< [s] runs end at the first control + duration; 0: log's end
   double kidnap_at = -1.0;        ///< [s] after the first control; < 0: no kidnapping
   double kidnap_skip = 10.0;      ///< [s] of odometry and scans dropped at kidnap_at
   std::string recovery = "auto";  ///< none | uniform | mixture | auto (global/kidnap: by method)

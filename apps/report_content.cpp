@@ -41,9 +41,13 @@ Document build_report(const json& results, const std::filesystem::path& dir) {
   Table summary;
   summary.header = {"experiment", "paper", "status", "configurations ok", "seconds"};
   const std::vector<std::pair<std::string, std::string>> experiments = {
-      {"slit", "§3.1, Table 2, Figures 1–2"},    {"arm", "§3.2, Figure 4"},
-      {"himmelblau", "§3.3, Table 4, Figure 5"}, {"mcl", "§4.1, Table 5, Figure 6"},
-      {"slam", "§4.2, Table 6, Figure 7"},       {"proposal_gain", "beyond the paper, Figure 8"}};
+      {"slit", "§3.1, Table 2, Figures 1–2"},
+      {"arm", "§3.2, Figure 4"},
+      {"himmelblau", "§3.3, Table 4, Figure 5"},
+      {"mcl", "§4.1, Table 5, Figure 6"},
+      {"slam", "§4.2, Table 6, Figure 7"},
+      {"proposal_gain", "beyond the paper, Figure 8"},
+      {"global_localization", "beyond the paper, Figure 9"}};
   for (const auto& [name, where] : experiments) {
     const auto& e = get(get(results, "experiments"), name);
     const auto& runs = experiment_runs(results, name);
@@ -74,6 +78,7 @@ Document build_report(const json& results, const std::filesystem::path& dir) {
   mcl_section(doc, results, numbers);
   slam_section(doc, results, numbers);
   proposal_gain_section(doc, results, numbers);
+  global_localization_section(doc, results, numbers);
 
   doc.heading(2, "How to repeat this run");
   doc.code(results.value("command", std::string("implicit reproduce")));

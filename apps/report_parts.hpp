@@ -77,5 +77,6 @@ void himmelblau_section(Document& doc, const json& results, const Numbers& numbe
 void mcl_section(Document& doc, const json& results, const Numbers& numbers);
 void slam_section(Document& doc, const json& results, const Numbers& numbers);
 void proposal_gain_section(Document& doc, const json& results, const Numbers& numbers);
+void global_localization_section(Document& doc, const json& results, const Numbers& numbers);
 
 }  // namespace implicit::app::report::parts

@@ -142,6 +142,42 @@ TEST(Cli, SlamSensorNoiseGateAndNewLandmarkDensityReachTheFilter) {
   EXPECT_NE(bad.err.find("--range-sd"), std::string::npos) << bad.err;
 }
 
+// `implicit mcl --init global --duration D` filters only the log's first D seconds (from the first
+// control): fewer steps than the whole log, and the error traces end just before D.
+TEST(Cli, MclGlobalDurationCutsTheLog) {
+  const std::string base = "mcl --init global --method standard -M 20 --runs 1 --json --quiet";
+  const auto whole = run_cli(base);
+  ASSERT_EQ(whole.code, 0) << whole.err;
+  TempDir dir("mcl_duration");
+  const auto cut = run_cli(base + " --duration 20 --out '" + dir.path().string() + "'");
+  ASSERT_EQ(cut.code, 0) << cut.err;
+  const int all_steps = nlohmann::json::parse(whole.out)["steps"].get<int>();
+  const int cut_steps = nlohmann::json::parse(cut.out)["steps"].get<int>();
+  EXPECT_GT(cut_steps, 0);
+  EXPECT_LT(cut_steps, all_steps);
+  std::ifstream csv(dir.path() / "mcl_global_standard_M20_errors.csv");
+  ASSERT_TRUE(csv) << "no errors CSV";
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "run,start_s,time_s,error_m,particles");
+  double last = -1.0;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    std::stringstream fields(line);
+    std::string run, start, time;
+    std::getline(fields, run, ',');
+    std::getline(fields, start, ',');
+    std::getline(fields, time, ',');
+    last = std::stod(time);
+    EXPECT_LT(last, 20.0) << line;
+    ++rows;
+  }
+  EXPECT_GT(rows, 0);
+  // The log's steps are 25 ms apart; a cut that stopped well short of D would be a bug too.
+  EXPECT_GT(last, 19.0);
+  EXPECT_EQ(run_cli(base + " --duration -1").code, 2);
+}
+
 // python/plots/common.py: missing file, missing column, bad number and short row each fail with
 // exit code 1 and a message naming file, line and column.
 TEST(PlotHelpers, FailLoudlyOnMissingOrMalformedCsv) {

@@ -31,7 +31,8 @@ bool require_all() {
 
 // Which figures and table files each experiment produces.
 const std::map<std::string, std::vector<int>> kFigures = {
-    {"slit", {1, 2}}, {"arm", {4}}, {"himmelblau", {5}}, {"mcl", {6}}, {"slam", {7}}};
+    {"slit", {1, 2}}, {"arm", {4}},  {"himmelblau", {5}},
+    {"mcl", {6}},     {"slam", {7}}, {"global_localization", {9}}};
 const std::map<std::string, std::string> kTables = {{"slit", "table2_slit.csv"},
                                                     {"himmelblau", "table4_himmelblau.csv"},
                                                     {"mcl", "table5_mcl.csv"},
@@ -74,7 +75,8 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
   EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
   EXPECT_NE(html.find("</html>"), std::string::npos);
   for (const char* heading :
-       {"Table 2", "Table 4", "Table 5", "Table 6", "Summary", "How to repeat this run"}) {
+       {"Table 2", "Table 4", "Table 5", "Table 6", "Summary", "How to repeat this run",
+        "Beyond the paper: global localization and kidnapping"}) {
     EXPECT_NE(md.find(heading), std::string::npos) << heading;
     EXPECT_NE(html.find(heading), std::string::npos) << heading;
   }
