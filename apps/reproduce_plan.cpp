@@ -56,8 +56,9 @@ void add_global_localization(Plan& plan, bool quick) {
   };
   std::vector<Study> studies;
   const int runs = quick ? 2 : 20;
-  const double duration = quick ? 40.0 : 0.0, span = quick ? 5.0 : 60.0;
-  const double kidnap_at = quick ? 10.0 : 60.0, skip = quick ? 5.0 : 10.0;
+  const double duration = quick ? 45.0 : 0.0, span = quick ? 5.0 : 60.0;
+  // Quick: the gap ends at 10 s, leaving 5 s after the 30 s of settling to score the recovery.
+  const double kidnap_at = quick ? 5.0 : 60.0, skip = quick ? 5.0 : 10.0;
   const int small_implicit = quick ? 30 : 200, large_implicit = quick ? 30 : 500;
   const int small_standard = quick ? 100 : 1000, large_standard = quick ? 100 : 5000;
   studies.push_back({"implicit", small_implicit, false});
