@@ -23,6 +23,7 @@
 #include "implicit/robot/carpark.hpp"
 #include "implicit/robot/csv_table.hpp"
 #include "parallel_runs.hpp"
+#include "run_statistics.hpp"
 #include "vehicle.hpp"
 #include "wilson.hpp"
 
@@ -33,23 +34,6 @@ using filter::LocalizationMetrics;
 using filter::LocalizationProblem;
 using filter::LocalizationRun;
 using robot::Pose;
-
-double mean_of(const std::vector<double>& v) {
-  return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
-}
-double sd_of(const std::vector<double>& v) {
-  if (v.size() < 2) return 0.0;
-  const double m = mean_of(v);
-  double s = 0.0;
-  for (double x : v) s += (x - m) * (x - m);
-  return std::sqrt(s / static_cast<double>(v.size() - 1));
-}
-double median_of(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /// The data as a robot log: a Car Park folder (carpark_dr.csv inside) or a plain-text log file.
 robot::RobotLog load_log(const std::string& data, const robot::UteModel& model) {

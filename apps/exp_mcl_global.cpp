@@ -18,21 +18,10 @@
 #include "implicit/core/error.hpp"
 #include "implicit/filter/global_run.hpp"
 #include "parallel_runs.hpp"
+#include "run_statistics.hpp"
 
 namespace implicit::app {
 namespace {
-
-double median_finite(std::vector<double> v) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-double mean(const std::vector<double>& v) {
-  return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
-}
 
 void check_settings(const MclSettings& s) {
   require(s.init == "known" || s.init == "global", "mcl --init: expected known or global, got '{}'",
@@ -172,19 +161,12 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
     write_errors(ctx.csv_path(fmt::format("mcl_{}_{}_M{}_errors.csv", kidnap ? "kidnap" : "global",
                                           s.method, s.particles)),
                  problem, t0, std::min<std::size_t>(runs, 5), run_number);
-  std::vector<double> success, converge, rmse, pmean, ppeak, injected, cpu, start;
+  const std::vector<double> success = column(records, 0), converge = column(records, 1),
+                            rmse = column(records, 2), pmean = column(records, 3),
+                            ppeak = column(records, 4), injected = column(records, 5),
+                            cpu = column(records, 6), start = column(records, 7);
   int uniform_starts = 0;
-  for (const auto& v : records) {
-    success.push_back(v.at(0));
-    converge.push_back(v.at(1));
-    rmse.push_back(v.at(2));
-    pmean.push_back(v.at(3));
-    ppeak.push_back(v.at(4));
-    injected.push_back(v.at(5));
-    cpu.push_back(v.at(6));
-    start.push_back(v.at(7));
-    uniform_starts += v.at(8) > 0 ? 1 : 0;
-  }
+  for (double v : column(records, 8)) uniform_starts += v > 0 ? 1 : 0;
   nlohmann::json j;
   j["method"] = s.method;
   j["init"] = s.init;
@@ -203,15 +185,15 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
       "success: position RMSE below 1 m from 30 s after the start (kidnapping: after "
       "the gap) to the end; converged: the error stays below 1 m for 5 s";
   const std::string prefix = kidnap ? "kidnap_recovery" : "global_success";
-  j[prefix + "_rate"] = mean(success);
-  j[kidnap ? "recovery_time_s_median" : "time_to_converge_s_median"] = median_finite(converge);
+  j[prefix + "_rate"] = mean_of(success);
+  j[kidnap ? "recovery_time_s_median" : "time_to_converge_s_median"] = median_of_finite(converge);
   j[kidnap ? "recovery_time_s_runs" : "time_to_converge_s_runs"] = converge;
   j["success_runs"] = success;
-  j["rmse_after_settle_m_median"] = median_finite(rmse);
-  j["particles_mean"] = mean(pmean);
+  j["rmse_after_settle_m_median"] = median_of_finite(rmse);
+  j["particles_mean"] = mean_of(pmean);
   j["particles_peak"] = ppeak.empty() ? 0.0 : *std::max_element(ppeak.begin(), ppeak.end());
-  j["injected_mean"] = mean(injected);
-  j["cpu_ms_per_step"] = mean(cpu);
+  j["injected_mean"] = mean_of(injected);
+  j["cpu_ms_per_step"] = mean_of(cpu);
   j["start_s_runs"] = start;
   // Mixture starts whose first scan had no isolated minimum, which started uniform instead.
   j["uniform_fallback_starts"] = uniform_starts;
