@@ -61,6 +61,22 @@ void init_runs(py::module_& m) {
         s.state_sd = kw["state_sd"].cast<std::vector<double>>();
         s.range_sd = kw["range_sd"].cast<double>();
         s.bearing_sd_deg = kw["bearing_sd_deg"].cast<double>();
+        s.init = kw["init"].cast<std::string>();
+        s.start_span = kw["start_span"].cast<double>();
+        s.duration = kw["duration"].cast<double>();
+        s.kidnap_at = kw["kidnap_at"].cast<double>();
+        s.kidnap_skip = kw["kidnap_skip"].cast<double>();
+        s.recovery = kw["recovery"].cast<std::string>();
+        s.recovery_alpha_slow = kw["recovery_alpha_slow"].cast<double>();
+        s.recovery_alpha_fast = kw["recovery_alpha_fast"].cast<double>();
+        s.kidnap_probability = kw["kidnap_probability"].cast<double>();
+        s.kld = kw["kld"].cast<bool>();
+        s.kld_err = kw["kld_err"].cast<double>();
+        s.kld_z = kw["kld_z"].cast<double>();
+        s.min_particles = kw["min_particles"].cast<int>();
+        s.max_particles = kw["max_particles"].cast<int>();
+        s.cover_spacing = kw["cover_spacing"].cast<double>();
+        s.cover_headings = kw["cover_headings"].cast<int>();
         return run_json(s, seed, out, threads, &app::run_mcl);
       },
       py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"));

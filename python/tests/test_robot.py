@@ -39,6 +39,22 @@ def test_mcl_run_equals_the_cli_json(cli):
         assert r[key] == c[key], key
 
 
+def test_global_start_and_kidnapping_equal_the_cli_json(cli):
+    # Localization without a known start through Python: the same runs as the tool.
+    r = implicit.mcl.run(method="implicit", particles=30, runs=2, seed=1, init="global",
+                         duration=45, start_span=5)
+    c = cli("mcl", "--method", "implicit", "-M", "30", "--runs", "2", "--seed", "1", "--init",
+            "global", "--duration", "45", "--start-span", "5")
+    for key in ("global_success_rate", "success_runs", "time_to_converge_s_runs",
+                "rmse_after_settle_m_median", "particles_mean", "steps"):
+        assert r[key] == c[key], key
+    k = implicit.mcl.run(method="standard", particles=50, runs=1, kidnap_at=5, kidnap_skip=5,
+                         duration=45, kld=True, min_particles=20, max_particles=200)
+    assert 0.0 <= k["kidnap_recovery_rate"] <= 1.0 and k["particles_peak"] <= 200
+    with pytest.raises(ValueError, match="--kidnap-at"):
+        implicit.mcl.run(init="global", kidnap_at=5, runs=1)
+
+
 @pytest.mark.parametrize("proposal,cli_method", [("implicit", "implicit"),
                                                  ("bootstrap", "standard")])
 def test_stepping_from_python_reproduces_the_cli_run(carpark_steps, proposal, cli_method):
