@@ -5,14 +5,15 @@
 //   g.start_time = 20.0;                   // ignore the data before
 //   LocalizationRun run = run_global_localization(problem, model, sensor, ImplicitProposal{},
 //                                                 options, g);
-//   GlobalMetrics m = global_metrics(run, problem, GlobalCriteria{});
+//   GlobalMetrics m = global_metrics(run, problem, g.start_time);  // scored from the start
 //
 // The run starts at the first step (at or after start_time) whose scan has at least
-// g.init.min_detections detections (the mixture: and an isolated minimum of -log p(z | x)): its particles are an exact importance sample of
-// u(x) p(z | x), u uniform over the map's bounds and all headings, drawn either from u itself
-// (the bootstrap's uniform cloud, weighted by the likelihood) or from the mixture over the minima
-// of F(x) = -log p(z | x) (global_localization.hpp). From the next step on it is the usual filter.
-// With options.recovery.enabled the same source feeds recovery's injections (recovery.hpp).
+// g.init.min_detections detections (the mixture: and an isolated minimum of -log p(z | x)): its
+// particles are an exact importance sample of u(x) p(z | x), u uniform over the map's bounds and
+// all headings, drawn either from u itself (the bootstrap's uniform cloud, weighted by the
+// likelihood) or from the mixture over the minima of F(x) = -log p(z | x)
+// (global_localization.hpp). From the next step on it is the usual filter. With
+// options.recovery.enabled the same source feeds recovery's injections (recovery.hpp).
 
 #include <chrono>
 #include <cmath>
@@ -106,8 +107,7 @@ LocalizationRun run_global_localization(const LocalizationProblem& problem, cons
     // The mixture waits for the first scan with an isolated minimum (with two detections, one
     // of them clutter, there may be none); the run's clock starts at start_time all the same.
     for (std::size_t n = first; n < steps && modes.empty(); ++n) {
-      if (problem.detections[n].size() < static_cast<std::size_t>(g.init.min_detections))
-        continue;
+      if (problem.detections[n].size() < static_cast<std::size_t>(g.init.min_detections)) continue;
       modes = find_pose_modes(pf.context(problem.detections[n]), bounds, g.init);
       if (!modes.empty()) first = n;
     }
