@@ -182,6 +182,14 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
           s.gps_std);
   require(s.reference_particles >= 1, "mcl --reference-particles: expected >= 1, got {}",
           s.reference_particles);
+  // Checked before the data (and a reference track) are loaded: a refusal costs nothing.
+  if (s.init != "known" || s.kidnap_at >= 0) {
+    check_global_settings(s);
+  } else {
+    require(!s.kld && (s.recovery == "auto" || s.recovery == "none"),
+            "mcl --kld / --recovery: expected --init global or --kidnap-at with them (they act "
+            "only on global-start and kidnapping runs)");
+  }
   MclSetup setup;
   setup.start = std::chrono::steady_clock::now();
   setup.log = load_log(s.data_dir, robot::UteModel());  // Car Park folders: the Ute's geometry
@@ -243,9 +251,6 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   }
 
   if (s.init != "known" || s.kidnap_at >= 0) return run_mcl_global(s, ctx, model, sensor, problem);
-  require(!s.kld && (s.recovery == "auto" || s.recovery == "none"),
-          "mcl --kld / --recovery: expected --init global or --kidnap-at with them (they act only "
-          "on global-start and kidnapping runs)");
 
   filter::FilterOptions options;
   options.particles = static_cast<std::size_t>(s.particles);

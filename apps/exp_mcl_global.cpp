@@ -21,9 +21,8 @@
 #include "run_statistics.hpp"
 
 namespace implicit::app {
-namespace {
 
-void check_settings(const MclSettings& s) {
+void check_global_settings(const MclSettings& s) {
   require(s.init == "known" || s.init == "global", "mcl --init: expected known or global, got '{}'",
           s.init);
   require(s.recovery == "auto" || s.recovery == "none" || s.recovery == "uniform" ||
@@ -38,6 +37,8 @@ void check_settings(const MclSettings& s) {
   require(s.truth == "gps", "mcl --init global / --kidnap-at: expected --truth gps, got '{}'",
           s.truth);
 }
+
+namespace {
 
 /// The source of the first particles and of recovery: uniform for the standard (bootstrap)
 /// method, the mixture over the minima for implicit, unless --recovery names one.
@@ -73,7 +74,7 @@ template <typename Motion>
 nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Motion& model,
                           const robot::RangeBearingSensor& sensor,
                           const filter::LocalizationProblem& full) {
-  check_settings(s);
+  check_global_settings(s);
   const bool kidnap = s.kidnap_at >= 0;
   const double t0 = full.schedule.steps.front().time;
   // --duration: every run ends at t0 + duration (measured from the first control, not from a

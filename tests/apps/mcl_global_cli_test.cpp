@@ -45,7 +45,9 @@ void check_time(const json& j, const std::string& key) {
 }
 
 TEST(MclGlobalCli, GlobalStartReportsRatesTimesAndParticles) {
-  const json j = run_json("--init global --method implicit -M 50 --runs 2");
+  // The first 45 s of the log: enough for both starts, and cheap under the sanitizers.
+  const json j =
+      run_json("--init global --method implicit -M 50 --runs 2 --duration 45 --start-span 5");
   ASSERT_FALSE(j.empty());
   EXPECT_EQ(j["init"], "global");
   EXPECT_EQ(j["source"], "mixture");  // implicit: the mixture over the minima
@@ -62,8 +64,8 @@ TEST(MclGlobalCli, GlobalStartReportsRatesTimesAndParticles) {
 
 TEST(MclGlobalCli, KldKeepsTheParticleCountWithinItsBounds) {
   const json j = run_json(
-      "--init global --method implicit -M 50 --runs 2 --kld --min-particles 20 "
-      "--max-particles 300");
+      "--init global --method implicit -M 50 --runs 2 --duration 45 --start-span 5 --kld "
+      "--min-particles 20 --max-particles 300");
   ASSERT_FALSE(j.empty());
   EXPECT_TRUE(j["kld"].get<bool>());
   EXPECT_LE(j["particles_peak"].get<double>(), 300.0);
