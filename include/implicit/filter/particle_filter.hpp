@@ -168,6 +168,7 @@ class ParticleFilter {
     });
     reset_weights();
     step_ = 0;
+    averages_.reset();  // a new start: the lost signal's history belongs to the old one
     summarize();
   }
 
