@@ -33,10 +33,13 @@ configure: deps
 build: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
+# The slow test programs are not in the default build (test-slow builds them); until then ctest
+# lists each as a failing <program>_NOT_BUILT placeholder, which `make test` leaves out by name.
 test: build
-	@ctest --test-dir $(BUILD_DIR) -LE slow --output-on-failure -j $(JOBS)
+	@ctest --test-dir $(BUILD_DIR) -LE slow -E "_slow_NOT_BUILT$$" --output-on-failure -j $(JOBS)
 
 test-slow: build
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target tests_slow
 	@ctest --test-dir $(BUILD_DIR) -L slow --output-on-failure -j $(JOBS)
 
 # -O1 keeps the instrumented tests fast enough; assertions stay on (no NDEBUG). The packaging test
