@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <string>
+
+#include <unistd.h>
 
 #include "implicit/robot/simulate.hpp"
 #include "implicit/slam/dataset.hpp"
@@ -20,7 +23,10 @@ SlamDataset unicycle_dataset(std::uint64_t seed) {
       robot::simulate_robot_log(model, robot::RangeBearingSensor(),
                                 robot::square_route_driver(1.0, o.route_side, true), o, seed);
   log.vehicle = robot::declare_vehicle(model.params());
-  const auto file = std::filesystem::temp_directory_path() / "implicit_any_robot_slam.log.gz";
+  // One file per process and seed: the tests of this file (and other checkouts) run in parallel.
+  const auto file = std::filesystem::temp_directory_path() /
+                    ("implicit_any_robot_slam_" + std::to_string(::getpid()) + "_" +
+                     std::to_string(seed) + ".log.gz");
   robot::write_robot_log(file, log);
   SlamDataset d = read_slam_log(file);
   std::filesystem::remove(file);

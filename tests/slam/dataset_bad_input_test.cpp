@@ -6,6 +6,8 @@
 #include <fstream>
 #include <string>
 
+#include <unistd.h>
+
 #include "implicit/core/error.hpp"
 #include "implicit/slam/dataset.hpp"
 
@@ -16,7 +18,7 @@ class SlamBadInput : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = std::filesystem::temp_directory_path() /
-           ("implicit_slam_bad_" +
+           ("implicit_slam_bad_" + std::to_string(::getpid()) + "_" +
             std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_ / "slam-synthetic");

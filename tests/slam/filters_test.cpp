@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <string>
+
+#include <unistd.h>
 
 #include <fmt/format.h>
 #include <Eigen/Dense>
@@ -259,7 +262,8 @@ TEST(SlamFilters, AllMethodsTrackTheSyntheticPath) {
 
 TEST(SlamData, RobotLogRoundTrip) {
   const SlamDataset d = short_data(200, 9, 4);
-  const auto path = std::filesystem::temp_directory_path() / "implicit_slam_roundtrip.log.gz";
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("implicit_slam_roundtrip_" + std::to_string(::getpid()) + ".log.gz");
   write_slam_log(d, path);
   const SlamDataset r = read_slam_log(path);
   ASSERT_EQ(r.steps(), d.steps());
