@@ -11,6 +11,9 @@
 #include <Eigen/Cholesky>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/implicit_maps.hpp"
+#include "implicit/core/newton.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/resampling.hpp"
 #include "implicit/core/rng.hpp"
@@ -428,21 +431,18 @@ class ParticleSlamFilter final : public SlamFilter {
       if (point_landmarks && fresh.size() == 1) {
         // (A), new landmark: joint 5-D linear map around the closed-form minimiser.
         const NewLandmarkObjective F(f, sigma1, fresh[0], r);
-        const Eigen::LLT<Mat<5>> llt(F.hessian_at_minimizer());
-        if (!F.ok() || llt.info() != Eigen::Success) {
+        SmallFactor<5> factor;
+        if (!F.ok() || !factor.compute(F.hessian_at_minimizer())) {
           p.x = f;
           p.log_w = -std::numeric_limits<double>::infinity();
           return;
         }
-        const Mat<5> l = llt.matrixL();
-        const Vec<5> xi = rng.normal_vector<5>();
-        const Vec<5> sample =
-            F.minimizer() + l.transpose().triangularView<Eigen::Upper>().solve(xi);
+        Vec<5> sample;
+        log_inc =
+            linear_map(WithConstant{F}, F.minimizer(), factor, rng.normal_vector<5>(), sample) +
+            std::log(opt_.new_landmark_density) - std::log(fresh[0](0));
         oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()),
                               LandmarkEstimate{sample.tail<2>(), Mat<2>::Zero()});
-        log_inc = 2.5 * kLog2Pi - l.diagonal().array().log().sum() + 0.5 * xi.squaredNorm() -
-                  F.evaluate(sample) - F.constant() + std::log(opt_.new_landmark_density) -
-                  std::log(fresh[0](0));
         x = sample.head<3>();
         p.map.push_back({sample.tail<2>(), Mat<2>::Zero()});
         landmark_placed = true;
@@ -484,20 +484,19 @@ class ParticleSlamFilter final : public SlamFilter {
         ok = ok && terms[i].set(k.mean, k.z, sk);
       }
       const PoseObjective F(f, sigma1, terms);
-      const PoseLaplace lp = ok ? minimize_pose_objective(F, f, opt_.newton_max_iterations,
-                                                          opt_.newton_decrement_tolerance)
-                                : PoseLaplace{};
-      oc.newton_iterations += lp.iterations;
+      PoseMinimum pm;
+      if (ok && F.ok())
+        pm = newton_minimize<SmallFactor<3>>(
+            F, f, pose_newton_options(opt_.newton_max_iterations, opt_.newton_decrement_tolerance));
+      oc.newton_iterations += pm.iterations;
       ++oc.newton_solves;
-      if (!lp.converged) ++oc.newton_not_converged;
-      if (!lp.ok) {
+      if (!pm.converged()) ++oc.newton_not_converged;
+      if (!pose_minimum_usable(pm)) {
         p.x = f;
         p.log_w = -std::numeric_limits<double>::infinity();
         return;
       }
-      const Vec<3> xi = rng.normal_vector<3>();
-      x = lp.mu + lp.L.transpose().triangularView<Eigen::Upper>().solve(xi);
-      log_inc = 1.5 * kLog2Pi - lp.log_det_L + 0.5 * xi.squaredNorm() - F.value(x) - F.constant();
+      log_inc = linear_map(WithConstant{F}, pm.x, pm.factor, rng.normal_vector<3>(), x);
     }
 
     if (!x.allFinite() || std::isnan(log_inc)) {

@@ -63,12 +63,12 @@ TEST(PoseObjective, CaseAOracle) {
   expect_rel(F.evaluate(x2, g, h, hgn), 76.093242330183, 1e-8, "F(f + d)");
   const Vec<3> want_g2(253.5311514905, -723.3752344939, 2903.9233431589);
   EXPECT_LT((g - want_g2).cwiseAbs().maxCoeff(), 2e-7);
-  const PoseLaplace lp = minimize_pose_objective(F, c.f, 50, 1e-24);
-  ASSERT_TRUE(lp.ok && lp.converged);
-  expect_rel<3>(lp.mu, {10.0667353158, 5.028063506, 0.3018870747}, 1e-9, "minimiser");
-  expect_rel(F.value(lp.mu), 0.011911716008, 1e-8, "phi");
-  expect_rel(lp.log_det_L, 10.545986532115, 1e-9, "log det L");
-  EXPECT_NEAR(lp.L(1, 0), -47.874846178, 1e-7);
+  const PoseMinimum lp = newton_minimize<SmallFactor<3>>(F, c.f, pose_newton_options(50, 1e-24));
+  ASSERT_TRUE(pose_minimum_usable(lp) && lp.converged());
+  expect_rel<3>(lp.x, {10.0667353158, 5.028063506, 0.3018870747}, 1e-9, "minimiser");
+  expect_rel(F.value(lp.x), 0.011911716008, 1e-8, "phi");
+  expect_rel(lp.factor.log_det_L(), 10.545986532115, 1e-9, "log det L");
+  EXPECT_NEAR(lp.factor.matrixL()(1, 0), -47.874846178, 1e-7);
 }
 
 TEST(PoseObjective, CaseBOracleTwoLandmarks) {
@@ -85,11 +85,11 @@ TEST(PoseObjective, CaseBOracleTwoLandmarks) {
   expect_rel(h(0, 0), 512.1047008408, 1e-8, "H11");
   expect_rel(h(0, 1), -1074.0587112778, 1e-8, "H12");
   expect_rel(h(2, 2), 59362.4369230944, 1e-8, "H33");
-  const PoseLaplace lp = minimize_pose_objective(F, c.f, 50, 1e-24);
-  ASSERT_TRUE(lp.ok);
-  expect_rel<3>(lp.mu, {10.0180469054, 5.0788693051, 0.3187026551}, 1e-9, "minimiser");
-  expect_rel(F.value(lp.mu), 0.543789188458, 1e-8, "phi");
-  expect_rel(lp.log_det_L, 10.869741220601, 1e-9, "log det L");
+  const PoseMinimum lp = newton_minimize<SmallFactor<3>>(F, c.f, pose_newton_options(50, 1e-24));
+  ASSERT_TRUE(pose_minimum_usable(lp));
+  expect_rel<3>(lp.x, {10.0180469054, 5.0788693051, 0.3187026551}, 1e-9, "minimiser");
+  expect_rel(F.value(lp.x), 0.543789188458, 1e-8, "phi");
+  expect_rel(lp.factor.log_det_L(), 10.869741220601, 1e-9, "log det L");
 }
 
 // (B) uses a full innovation covariance S = H_m P H_m^T + Sigma2: check the analytic gradient and

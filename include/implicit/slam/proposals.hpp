@@ -13,15 +13,17 @@
 // + 1/2 e(x, theta)^T Sigma2^-1 e(x, theta) with a flat prior on theta. Its minimiser is closed
 // form, mu = (f, g(f, z)) with F(mu) = 0, and H = blockdiag(Sigma1^-1, 0) + J^T Sigma2^-1 J.
 //
-//   PoseObjective F(f, sigma1, terms);
-//   PoseLaplace lp = minimize_pose_objective(F, f, 20, 1e-10);  // never throws
-//   Pose x = lp.mu + lp.L.transpose().triangularView<Eigen::Upper>().solve(xi);
-//   double log_w = 1.5 * kLog2Pi - lp.log_det_L + 0.5 * xi.squaredNorm() - F.value(x) -
-//   F.constant();
+// Both are minimised and sampled by the implicit-sampling kernel (core/newton.hpp,
+// core/implicit_maps.hpp); only F and its derivatives live here:
 //
-// Mistakes to avoid: dropping constant() or log_det_L from the weight (they differ between
-// particles, spec E23/E24); differentiating at range 0 (value() returns +inf there, and the
-// line search treats it as a failed step).
+//   PoseObjective F(f, sigma1, terms);
+//   PoseMinimum r = newton_minimize<SmallFactor<3>>(F, f, pose_newton_options(20, 1e-10));
+//   Pose x;
+//   double log_w = linear_map(WithConstant{F}, r.x, r.factor, xi, x);  // if pose_minimum_usable(r)
+//
+// Mistakes to avoid: dropping constant() (WithConstant) or log det L from the weight (they differ
+// between particles, spec E23/E24); differentiating at range 0 (F is +inf there, and the line
+// search treats it as a failed step).
 
 #include <cmath>
 #include <cstddef>
@@ -30,6 +32,8 @@
 
 #include <Eigen/Cholesky>
 
+#include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/newton.hpp"
 #include "implicit/core/types.hpp"
 #include "implicit/core/weights.hpp"
 #include "implicit/robot/range_bearing.hpp"
@@ -75,15 +79,14 @@ class PoseObjective {
   /// 1/2 log det(2 pi Sigma1) + sum_i 1/2 log det(2 pi S_i).
   double constant() const { return constant_; }
 
-  /// F(x) without constant(); +inf when not finite (e.g. x on a landmark).
+  /// F(x) without constant(); +inf when not finite (e.g. x on a landmark). No Jacobians: this is
+  /// what backtracking and the weight call.
   double value(const Vec<3>& x) const {
     const Vec<3> d = x - f_;
     double v = 0.5 * d.dot(precision_ * d);
     for (const auto& t : terms_) {
-      const double dx = x(0) - t.landmark(0), dy = x(1) - t.landmark(1);
-      const double r = std::sqrt(dx * dx + dy * dy);
-      const Vec<2> e(r - t.z(0), wrap_angle(std::atan2(-dy, -dx) - x(2) + kPi / 2.0 - t.z(1)));
-      v += 0.5 * e.dot(t.s_llt.solve(e));
+      const Residual res(t, x);
+      v += 0.5 * res.e.dot(t.s_llt.solve(res.e));
     }
     return std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
   }
@@ -96,13 +99,12 @@ class PoseObjective {
     hess_gn = precision_;
     Mat<2> second = Mat<2>::Zero();  // residual-weighted second derivatives (x, y block)
     for (const auto& t : terms_) {
-      const double dx = x(0) - t.landmark(0), dy = x(1) - t.landmark(1);
-      const double r2 = dx * dx + dy * dy, r = std::sqrt(r2);
-      const Vec<2> e(r - t.z(0), wrap_angle(std::atan2(-dy, -dx) - x(2) + kPi / 2.0 - t.z(1)));
+      const Residual res(t, x);
+      const double dx = res.dx, dy = res.dy, r2 = res.r2, r = res.r;
       Eigen::Matrix<double, 2, 3> j;
       j << dx / r, dy / r, 0.0, -dy / r2, dx / r2, -1.0;
-      const Vec<2> w = t.s_llt.solve(e);
-      v += 0.5 * e.dot(w);
+      const Vec<2> w = t.s_llt.solve(res.e);
+      v += 0.5 * res.e.dot(w);
       grad.noalias() += j.transpose() * w;
       const Eigen::Matrix<double, 2, 3> sj = t.s_llt.solve(j);
       hess_gn.noalias() += j.transpose() * sj;
@@ -114,10 +116,37 @@ class PoseObjective {
     second(1, 0) = second(0, 1);
     hess = hess_gn;
     hess.topLeftCorner<2, 2>() += second;
+    return std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
+  }
+
+  /// The kernel's form (core/newton.hpp): the value alone, or all derivatives (the Newton loop
+  /// asks for the gradient, Hessian and Gauss-Newton Hessian together).
+  double evaluate(const Vec<3>& x, Vec<3>* grad, Mat<3>* hess, Mat<3>* hess_gn = nullptr) const {
+    if (grad == nullptr && hess == nullptr && hess_gn == nullptr) return value(x);
+    if (grad != nullptr && hess != nullptr && hess_gn != nullptr)
+      return evaluate(x, *grad, *hess, *hess_gn);
+    Vec<3> g;
+    Mat<3> h, gn;
+    const double v = evaluate(x, g, h, gn);
+    if (grad != nullptr) *grad = g;
+    if (hess != nullptr) *hess = h;
+    if (hess_gn != nullptr) *hess_gn = gn;
     return v;
   }
 
  private:
+  /// e = (range - z_r, wrap(bearing - z_b)) at x, with the offsets its derivatives need.
+  struct Residual {
+    double dx, dy, r2, r;
+    Vec<2> e;
+    Residual(const LandmarkTerm& t, const Vec<3>& x)
+        : dx(x(0) - t.landmark(0)),
+          dy(x(1) - t.landmark(1)),
+          r2(dx * dx + dy * dy),
+          r(std::sqrt(r2)),
+          e(r - t.z(0), wrap_angle(std::atan2(-dy, -dx) - x(2) + kPi / 2.0 - t.z(1))) {}
+  };
+
   Vec<3> f_;
   std::span<const LandmarkTerm> terms_;
   Eigen::LLT<Mat<3>> llt1_;
@@ -126,73 +155,47 @@ class PoseObjective {
   bool ok_ = false;
 };
 
-/// The Gaussian approximation that the 3-D linear map samples from, and how it was found.
-struct PoseLaplace {
-  Vec<3> mu = Vec<3>::Zero();
-  Mat<3> L = Mat<3>::Identity();  ///< lower Cholesky factor of the Hessian used for sampling
-  double log_det_L = 0.0;
-  int iterations = 0;
-  bool converged = false;
-  bool gauss_newton = false;  ///< the exact Hessian at mu was not SPD; Gauss-Newton was used
-  bool ok = false;            ///< false: no finite SPD approximation (weight the particle zero)
-};
+/// The pose minimum of implicit SLAM: mu = x, the factor of the Hessian used for sampling, and
+/// how it was found (exact_factor false: the exact Hessian was not SPD, Gauss-Newton was used).
+using PoseMinimum = NewtonMinimum<SmallFactor<3>>;
 
-/// Damped Newton (exact Hessian, Gauss-Newton when it is not SPD, Armijo backtracking where a
-/// non-finite F is a failed step). Stops when the Newton decrement g^T H^-1 g falls below
-/// `decrement_tolerance`: the centre is then within sqrt(tol) posterior standard deviations of the
-/// minimiser, and the factor of the Hessian already computed there is returned (no extra
-/// evaluation). Any centre and any SPD Hessian give exact weights (spec §1.1), so the tolerance
-/// only trades efficiency. Never throws; fixed-size algebra, no allocation.
-inline PoseLaplace minimize_pose_objective(const PoseObjective& F, const Vec<3>& x0,
-                                           int max_iterations, double decrement_tolerance) {
-  PoseLaplace out;
-  if (!F.ok()) return out;
-  Vec<3> x = x0, g, gt;
-  Mat<3> h, hgn, ht, hgnt;
-  double v = F.evaluate(x, g, h, hgn);
-  if (!std::isfinite(v)) return out;
-  Eigen::LLT<Mat<3>> llt;
-  for (;;) {
-    llt.compute(h);
-    out.gauss_newton = llt.info() != Eigen::Success || !h.allFinite();
-    if (out.gauss_newton) {
-      llt.compute(hgn);
-      if (llt.info() != Eigen::Success || !hgn.allFinite()) return out;
-    }
-    const Vec<3> step = -llt.solve(g);
-    const double decrement = -g.dot(step);
-    if (decrement < decrement_tolerance) {
-      out.converged = true;
-      break;
-    }
-    if (out.iterations >= max_iterations) break;
-    ++out.iterations;
-    // Full step with derivatives first (usually accepted); then backtrack on values only.
-    Vec<3> xt = x + step;
-    double vt = F.evaluate(xt, gt, ht, hgnt);
-    if (!(vt <= v - 1e-4 * decrement)) {
-      double t = 1.0;
-      bool accepted = false;
-      for (int k = 0; k < 40 && !accepted; ++k) {
-        t *= 0.5;
-        accepted = F.value(x + t * step) <= v - 1e-4 * t * decrement;
-      }
-      if (!accepted) break;  // keep x and its factor
-      xt = x + t * step;
-      vt = F.evaluate(xt, gt, ht, hgnt);
-    }
-    x = xt;
-    v = vt;
-    g = gt;
-    h = ht;
-    hgn = hgnt;
-  }
-  out.mu = x;
-  out.L = llt.matrixL();
-  out.log_det_L = out.L.diagonal().array().log().sum();
-  out.ok = std::isfinite(out.log_det_L) && x.allFinite();
-  return out;
+/// The kernel's options for the pose solve: exact Hessian, Gauss-Newton when it is not SPD,
+/// Armijo backtracking (40 halvings) where a non-finite F is a failed step, and one stopping
+/// rule: the Newton decrement g^T H^-1 g below `decrement_tolerance`. The centre is then within
+/// sqrt(tol) posterior standard deviations of the minimiser, and the factor already computed
+/// there is the one returned (no extra evaluation). Any centre and any SPD Hessian give exact
+/// weights (spec §1.1), so the tolerance only trades efficiency.
+inline NewtonOptions pose_newton_options(int max_iterations, double decrement_tolerance) {
+  NewtonOptions o;
+  o.max_iterations = max_iterations;
+  o.decrement_tolerance = decrement_tolerance;
+  o.gradient_tolerance = 0.0;
+  o.step_tolerance = 0.0;
+  o.final_step = 0.0;
+  o.armijo = 1e-4;
+  o.max_backtracks = 40;
+  o.fallback = HessianFallback::kGaussNewton;
+  return o;
 }
+
+/// The minimum can be sampled: a finite point with an SPD factor of the Hessian there.
+inline bool pose_minimum_usable(const PoseMinimum& r) {
+  return r.factor_ok && r.status != MinimizeStatus::kNonFinite && r.x.allFinite();
+}
+
+/// F with its constant, for the weight: log_weight.hpp needs F(X) including every constant that
+/// differs between particles, while Newton minimises F without it (its round-off floor stays
+/// that of F).
+template <typename Objective>
+struct WithConstant {
+  const Objective& F;
+  template <typename V, typename G, typename H>
+  double evaluate(const V& x, G grad, H hess) const {
+    return F.evaluate(x, grad, hess) + F.constant();
+  }
+};
+template <typename Objective>
+WithConstant(const Objective&) -> WithConstant<Objective>;
 
 /// A detection z of a known landmark whose estimate is N(mean, cov) (cov = 0: point landmark).
 struct KnownLandmark {
