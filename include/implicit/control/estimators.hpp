@@ -15,8 +15,10 @@
 
 #include "implicit/control/path_solvers.hpp"
 #include "implicit/control/wall_modes.hpp"
-#include "implicit/core/banded.hpp"
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/implicit_maps.hpp"
+#include "implicit/core/log_weight.hpp"
 #include "implicit/core/minimize.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/types.hpp"
@@ -88,8 +90,8 @@ PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
   constexpr int D = Problem::kStateDim;
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
   const int n = F.num_blocks(), N = n * D;
-  auto r = minimize_banded(F, start, options);
-  if (r.status == MinimizeStatus::kNonFinite) {
+  auto r = minimize_path(F, start, options);
+  if (r.status == MinimizeStatus::kNonFinite || !r.factor_ok) {
     PsiEstimate dead;  // psi = 0: every sample has zero weight
     dead.samples = M;
     dead.wall_hits = M;
@@ -97,39 +99,34 @@ PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
     dead.minimizer = r.x;
     return dead;
   }
-  if (!r.factor.ok()) factor_damped(r.hessian, r.factor);
-  const double log_det_L = r.factor.log_det_L();
+  // The weights are the kernel's implicit weights of exp(-F), divided by the normaliser of the
+  // path measure (spec §2.2): psi = Z / normaliser.
+  const double log_norm = problem.log_normalizer(n);
   std::vector<double> lw(static_cast<std::size_t>(M));
   Eigen::VectorXd xi(N), y(N);
   int failures = 0;
   if (map == SamplingMap::kLinear) {
-    const double log_norm = problem.log_normalizer(n) - 0.5 * N * kLog2Pi + log_det_L;
     for (int j = 0; j < M; ++j) {
       rng.fill_normal(xi);
-      y = xi;
-      r.factor.upper_solve_in_place(y);
-      y += r.x;
-      const double fy = F.evaluate(y, nullptr, nullptr);
-      lw[static_cast<std::size_t>(j)] =
-          std::isfinite(fy) ? -fy + 0.5 * xi.squaredNorm() - log_norm : kNegInf;
+      lw[static_cast<std::size_t>(j)] = linear_map(F, r.x, r.factor, xi, y) - log_norm;
     }
   } else {
-    // log w = (N/2) log 2pi - phi - log det L + (1 - N/2) log rho + (N - 1) log lambda
-    //         - log |grad F . d|, minus the path normaliser (spec §1.3, §2.2).
-    const double log_const = 0.5 * N * kLog2Pi - r.value - log_det_L - problem.log_normalizer(n);
     Eigen::VectorXd d(N);
     for (int j = 0; j < M; ++j) {
       rng.fill_normal(xi);
       const double rho = xi.squaredNorm();
       d = xi / std::sqrt(rho);
       r.factor.upper_solve_in_place(d);
+      const double level = r.value + 0.5 * rho;
       double lambda = 0.0, slope = 0.0;
-      const auto out = solve_ray(F, r.x, d, r.value + 0.5 * rho, rho, lambda, slope);
-      failures += out == RayOutcome::kFailed ? 1 : 0;
+      const auto out = solve_path_ray(F, r.x, d, level, rho, lambda, slope);
+      failures += out == RayStatus::kOk || out == RayStatus::kJump ? 0 : 1;
       lw[static_cast<std::size_t>(j)] =
-          out == RayOutcome::kOk ? log_const + (1.0 - 0.5 * N) * std::log(rho) +
-                                       (N - 1.0) * std::log(lambda) - std::log(std::abs(slope))
-                                 : kNegInf;
+          out == RayStatus::kOk
+              ? implicit_log_weight(N, rho, level, r.factor.log_det_L(),
+                                    random_map_log_jacobian(N, rho, lambda, slope)) -
+                    log_norm
+              : kNegInf;
     }
   }
   PsiEstimate out = summarize(lw);
@@ -145,7 +142,7 @@ PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
 template <int D>
 struct WallMixture {
   std::vector<WallMode> modes;
-  std::vector<BlockTridiagonalCholesky<D>> factors;
+  std::vector<BandedFactor<D>> factors;
   std::vector<double> log_det, log_pi, cumulative;
   double total = 0.0;  ///< the last cumulative weight (1 up to rounding)
   MinimizeStatus status = MinimizeStatus::kConverged;  ///< the worst mode's
@@ -198,23 +195,22 @@ WallMixture<PathF::Block> fit_wall_modes(const PathF& F, const WallsAhead<Proble
   // The unconstrained minimiser: the start of every mode's constrained search.
   Eigen::VectorXd free_min = start;
   if (!frozen) {
-    const auto r = minimize_banded(F, start, options);
+    const auto r = minimize_path(F, start, options);
     if (r.status != MinimizeStatus::kNonFinite) free_min = r.x;
   }
   mix.factors.resize(mix.modes.size());
   mix.log_det.assign(mix.modes.size(), 0.0);
-  Eigen::VectorXd nu;
-  std::vector<WallConstraint<D>> cons;
+  PathConstraints cons;
   for (std::size_t c = 0; c < mix.modes.size(); ++c) {
     WallMode& md = mix.modes[c];
-    auto r = mode_minimum(F, w, md, free_min, frozen != nullptr, options, nu, cons);
+    auto r = mode_minimum(F, w, md, free_min, frozen != nullptr, options, cons);
     md.status = r.status;
     md.minimizer = r.x;
     md.samples = 0;
     md.wall_hits = 0;
     md.wall_values.resize(static_cast<std::size_t>(A));
     for (int i = 0; i < A; ++i) md.wall_values[static_cast<std::size_t>(i)] = w.value(i, r.x);
-    const bool usable = r.status != MinimizeStatus::kNonFinite && r.factor.ok();
+    const bool usable = r.status != MinimizeStatus::kNonFinite && r.factor_ok;
     md.phi = usable ? r.value : std::numeric_limits<double>::infinity();
     if (usable) {
       mix.factors[c] = std::move(r.factor);
@@ -227,20 +223,21 @@ WallMixture<PathF::Block> fit_wall_modes(const PathF& F, const WallsAhead<Proble
   return mix;
 }
 
-/// log q(y) + const for the linear mixture q = sum_c pi_c N(mu_c, H_c^{-1}) at y, drawn from
-/// component c with reference xi; streamed, no allocation (`diff` is scratch).
+/// log q(y) / q_c(y) for the linear mixture q = sum_i pi_i N(mu_i, H_i^{-1}) at y = mu_c +
+/// L_c^{-T} xi, drawn from component c: the weight of the mixture is the kernel's implicit weight
+/// of component c divided by this ratio. Streamed, no allocation (`diff` is scratch).
 template <int D>
-double mixture_log_density(const WallMixture<D>& mix, const Eigen::VectorXd& y,
-                           const Eigen::VectorXd& xi, std::size_t c, Eigen::VectorXd& diff) {
+double mixture_log_ratio(const WallMixture<D>& mix, const Eigen::VectorXd& y,
+                         const Eigen::VectorXd& xi, std::size_t c, Eigen::VectorXd& diff) {
+  // log(pi_i q_i(y) / q_c(y)); the (2 pi)^{-N/2} of the components cancels.
+  const double log_q_c = mix.log_det[c] - 0.5 * xi.squaredNorm();
   double top = -std::numeric_limits<double>::infinity(), sum = 0.0;
   for (std::size_t i = 0; i < mix.modes.size(); ++i) {
     if (!std::isfinite(mix.log_pi[i])) continue;
-    double t;
-    if (i == c) {
-      t = mix.log_pi[i] + mix.log_det[i] - 0.5 * xi.squaredNorm();
-    } else {
+    double t = mix.log_pi[i];
+    if (i != c) {
       diff = y - mix.modes[i].minimizer;
-      t = mix.log_pi[i] + mix.log_det[i] - 0.5 * upper_norm2(mix.factors[i], diff);
+      t += mix.log_det[i] - 0.5 * upper_norm2(mix.factors[i], diff) - log_q_c;
     }
     if (t > top) {
       sum = sum * std::exp(top - t) + 1.0;
@@ -258,21 +255,29 @@ double mixture_log_density(const WallMixture<D>& mix, const Eigen::VectorXd& y,
 /// one-to-one onto the region. psi = sum_c Z_c, and choosing c with probability pi_c makes
 /// w / pi_c unbiased for it. Writes the log weight (without the path normaliser) to `l`.
 template <typename PathF, typename Problem>
-RayOutcome random_map_in_mode(const PathF& F, const WallsAhead<Problem>& w,
-                              const WallMixture<PathF::Block>& mix, std::size_t c,
-                              const Eigen::VectorXd& xi, Eigen::VectorXd& d,
-                              std::vector<double>& a_mu, std::vector<double>& a_d, double& l) {
+RayStatus random_map_in_mode(const PathF& F, const WallsAhead<Problem>& w,
+                             const WallMixture<PathF::Block>& mix, std::size_t c,
+                             const Eigen::VectorXd& xi, Eigen::VectorXd& d,
+                             std::vector<double>& a_mu, std::vector<double>& a_d, double& l) {
   constexpr int D = PathF::Block;
   const int A = w.size();
-  const double N = static_cast<double>(xi.size());
+  const int N = static_cast<int>(xi.size());
   const double rho = xi.squaredNorm();
   d = xi / std::sqrt(rho);
   mix.factors[c].upper_solve_in_place(d);
   const WallMode& md = mix.modes[c];
   for (int i = 0; i < A; ++i) {
     const auto& a = w.wall(i).direction;
-    a_mu[static_cast<std::size_t>(i)] = a.dot(md.minimizer.template segment<D>(w.block_of(i) * D));
-    a_d[static_cast<std::size_t>(i)] = a.dot(d.template segment<D>(w.block_of(i) * D));
+    const auto s = static_cast<std::size_t>(i);
+    a_mu[s] = a.dot(md.minimizer.template segment<D>(w.block_of(i) * D));
+    a_d[s] = a.dot(d.template segment<D>(w.block_of(i) * D));
+    // mu_c sits on the edge of an opening when that wall is clamped: a ray leaving through the
+    // edge never enters the region, F is +inf on all of it, so the sample has no root and
+    // weight 0 (F jumps over the level at lambda = 0; a root finder's bracket cannot shrink
+    // onto 0 to a relative tolerance, so this is decided here, in closed form).
+    const auto& op = w.opening(i, md);
+    if ((a_mu[s] >= op.upper && a_d[s] >= 0.0) || (a_mu[s] <= op.lower && a_d[s] <= 0.0))
+      return RayStatus::kJump;
   }
   auto inside = [&](double lambda) {
     for (int i = 0; i < A; ++i)
@@ -283,10 +288,12 @@ RayOutcome random_map_in_mode(const PathF& F, const WallsAhead<Problem>& w,
   };
   const RestrictedPath restricted{F, inside};
   double lambda = 0.0, slope = 0.0;
-  const auto ray = solve_ray(restricted, md.minimizer, d, md.phi + 0.5 * rho, rho, lambda, slope);
-  if (ray == RayOutcome::kOk)
-    l = 0.5 * N * kLog2Pi - md.phi - mix.log_det[c] + (1.0 - 0.5 * N) * std::log(rho) +
-        (N - 1.0) * std::log(lambda) - std::log(std::abs(slope)) - mix.log_pi[c];
+  const double level = md.phi + 0.5 * rho;
+  const auto ray = solve_path_ray(restricted, md.minimizer, d, level, rho, lambda, slope);
+  if (ray == RayStatus::kOk)
+    l = implicit_log_weight(N, rho, level, mix.log_det[c],
+                            random_map_log_jacobian(N, rho, lambda, slope)) -
+        mix.log_pi[c];
   return ray;
 }
 
@@ -310,7 +317,7 @@ PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateD
     return dead;
   }
   Rng pick({key.seed, key.step, key.index, purpose::kMixture});
-  const double log_norm = problem.log_normalizer(n) - 0.5 * N * kLog2Pi;
+  const double log_norm = problem.log_normalizer(n);
   std::vector<double> lw(static_cast<std::size_t>(M));
   Eigen::VectorXd xi(N), y(N), diff(N), d(N);
   int failures = 0;
@@ -323,10 +330,10 @@ PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateD
     double& l = lw[static_cast<std::size_t>(j)];
     if (map == SamplingMap::kRandom) {
       const auto ray = random_map_in_mode(F, w, mix, c, xi, d, a_mu, a_d, l);
-      if (ray == RayOutcome::kOk) {
-        l -= problem.log_normalizer(n);
+      if (ray == RayStatus::kOk) {
+        l -= log_norm;
       } else {
-        if (ray == RayOutcome::kWall)
+        if (ray == RayStatus::kJump)
           ++mix.modes[c].wall_hits;
         else
           ++failures;
@@ -344,7 +351,8 @@ PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateD
       l = kNegInf;
       continue;
     }
-    l = -fy - mixture_log_density(mix, y, xi, c, diff) - log_norm;
+    l = implicit_log_weight(N, xi.squaredNorm(), fy, mix.log_det[c]) -
+        mixture_log_ratio(mix, y, xi, c, diff) - log_norm;
   }
   PsiEstimate result = summarize(lw);
   result.map_failures = failures;

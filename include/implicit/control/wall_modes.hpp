@@ -14,7 +14,6 @@
 
 #include "implicit/control/path_solvers.hpp"
 #include "implicit/control/problem.hpp"
-#include "implicit/core/banded.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/minimize.hpp"
 #include "implicit/core/types.hpp"
@@ -101,22 +100,23 @@ std::vector<WallMode> enumerate_modes(const WallsAhead<Problem>& w) {
 /// minimiser is outside it); with several walls or a non-convex F this is a safeguarded
 /// heuristic, capped at 2 A + 2 rounds. `clamped` is updated in place.
 template <typename PathF, typename Problem>
-BandedMinimizeResult<PathF::Block> active_set_search(
-    const PathF& F, const WallsAhead<Problem>& w, const WallMode& md, const Eigen::VectorXd& from,
-    std::vector<int>& clamped, const MinimizeOptions& options, Eigen::VectorXd& nu,
-    std::vector<WallConstraint<PathF::Block>>& cons) {
+PathMinimum<PathF::Block> active_set_search(const PathF& F, const WallsAhead<Problem>& w,
+                                            const WallMode& md, const Eigen::VectorXd& from,
+                                            std::vector<int>& clamped,
+                                            const MinimizeOptions& options, PathConstraints& cons) {
   const int A = w.size();
-  BandedMinimizeResult<PathF::Block> r;
+  PathMinimum<PathF::Block> r;
   Eigen::VectorXd at = from;
   for (int round = 0; round < 2 * A + 2; ++round) {
-    cons.clear();
-    for (int i = 0; i < A; ++i) {
+    const auto held = std::count_if(clamped.begin(), clamped.end(), [](int s) { return s != 0; });
+    reset_constraints(cons, from.size(), static_cast<int>(held));
+    for (int i = 0, j = 0; i < A; ++i) {
       const int side = clamped[static_cast<std::size_t>(i)];
       if (side == 0) continue;
       const auto& op = w.opening(i, md);
-      cons.push_back({w.block_of(i), w.wall(i).direction, side < 0 ? op.lower : op.upper});
+      set_constraint(cons, j++, w.block_of(i), w.wall(i).direction, side < 0 ? op.lower : op.upper);
     }
-    r = minimize_with_equalities(F, at, cons, options, nu);
+    r = minimize_path(F, at, options, &cons);
     if (r.status == MinimizeStatus::kNonFinite) break;
     at = r.x;
     bool changed = false;
@@ -135,7 +135,7 @@ BandedMinimizeResult<PathF::Block> active_set_search(
       for (int i = 0; i < A; ++i) {
         int& side = clamped[static_cast<std::size_t>(i)];
         if (side == 0) continue;
-        if (side * nu(j) < 0.0) {
+        if (side * r.multipliers(j) < 0.0) {
           side = 0;
           changed = true;
         }
@@ -187,27 +187,25 @@ Eigen::VectorXd shifted_start(const WallsAhead<Problem>& w, const WallMode& md,
 /// centre costs efficiency only: the weights use the true F, so the estimator stays unbiased
 /// for any centre.
 template <typename PathF, typename Problem>
-BandedMinimizeResult<PathF::Block> mode_minimum(const PathF& F, const WallsAhead<Problem>& w,
-                                                WallMode& md, const Eigen::VectorXd& free_min,
-                                                bool frozen, const MinimizeOptions& options,
-                                                Eigen::VectorXd& nu,
-                                                std::vector<WallConstraint<PathF::Block>>& cons) {
+PathMinimum<PathF::Block> mode_minimum(const PathF& F, const WallsAhead<Problem>& w, WallMode& md,
+                                       const Eigen::VectorXd& free_min, bool frozen,
+                                       const MinimizeOptions& options, PathConstraints& cons) {
   const int A = w.size();
   if (frozen) {
-    cons.clear();
+    reset_constraints(cons, md.minimizer.size(), A);
     for (int i = 0; i < A; ++i)
-      cons.push_back(
-          {w.block_of(i), w.wall(i).direction, md.wall_values[static_cast<std::size_t>(i)]});
-    return minimize_with_equalities(F, md.minimizer, cons, options, nu);
+      set_constraint(cons, i, w.block_of(i), w.wall(i).direction,
+                     md.wall_values[static_cast<std::size_t>(i)]);
+    return minimize_path(F, md.minimizer, options, &cons);
   }
   std::vector<int> clamped_free = md.clamped, clamped_start = md.clamped;
-  auto r = active_set_search(F, w, md, free_min, clamped_free, options, nu, cons);
+  auto r = active_set_search(F, w, md, free_min, clamped_free, options, cons);
   md.clamped = clamped_free;
   const Eigen::VectorXd shifted = shifted_start(w, md, free_min);
   if ((shifted - free_min).cwiseAbs().maxCoeff() > 0.0) {
-    auto other = active_set_search(F, w, md, shifted, clamped_start, options, nu, cons);
-    const bool other_ok = other.status != MinimizeStatus::kNonFinite && other.factor.ok();
-    const bool r_ok = r.status != MinimizeStatus::kNonFinite && r.factor.ok();
+    auto other = active_set_search(F, w, md, shifted, clamped_start, options, cons);
+    const bool other_ok = other.status != MinimizeStatus::kNonFinite && other.factor_ok;
+    const bool r_ok = r.status != MinimizeStatus::kNonFinite && r.factor_ok;
     if (other_ok && (!r_ok || other.value < r.value)) {
       r = std::move(other);
       md.clamped = clamped_start;
