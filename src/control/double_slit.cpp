@@ -6,6 +6,7 @@
 
 #include "implicit/control/normal_tail.hpp"
 #include "implicit/core/error.hpp"
+#include "implicit/core/log_weight.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/weights.hpp"
 
@@ -215,7 +216,9 @@ void DoubleSlit::path_weights(double x, int k, int s, double edge, const Eigen::
           n, xi.rows());
   const auto& chol = factors_[static_cast<std::size_t>(k)];
   const Eigen::VectorXd mu = minimizer_path(x, k, edge);
-  const double log_norm = log_normalizer(k);
+  // psi = Z / (2 pi sigma dt)^{n/2}: the implicit weights of exp(-F) over the path measure's
+  // normaliser.
+  const double log_path_norm = 0.5 * n * (kLog2Pi + std::log(p_.sigma * p_.dt));
   const int M = static_cast<int>(xi.cols());
   log_w.resize(static_cast<std::size_t>(M));
   if (delta) delta->resize(static_cast<std::size_t>(M));
@@ -231,7 +234,10 @@ void DoubleSlit::path_weights(double x, int k, int s, double edge, const Eigen::
     if (paths) paths->col(j) = y;
     const bool pass = !walled || p_.slits[static_cast<std::size_t>(s)].contains(y(w - 1));
     log_w[static_cast<std::size_t>(j)] =
-        pass ? -log_norm - path_function(x, y) + 0.5 * xi.col(j).squaredNorm() : -kInf;
+        pass ? implicit_log_weight(n, xi.col(j).squaredNorm(), path_function(x, y),
+                                   chol.log_det_L()) -
+                   log_path_norm
+             : -kInf;
   }
 }
 

@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/log_weight.hpp"
 #include "implicit/core/target.hpp"
 #include "implicit/core/weights.hpp"
 
@@ -122,7 +123,10 @@ namespace {
 double log_psi_hat(const HimmelblauProblem& pb, const HimmelblauLaplace& lp,
                    const Eigen::MatrixXd& xi, std::vector<double>& lw) {
   const Eigen::VectorXd mu = lp.path();
-  const double log_norm = lp.n * std::log(pb.sigma * pb.dt) + lp.log_det_L;
+  // psi = Z / (2 pi sigma dt)^n (2n path coordinates): the implicit weights of exp(-F) over the
+  // path measure's normaliser.
+  const double log_path_norm = lp.n * (kLog2Pi + std::log(pb.sigma * pb.dt));
+  const int m = static_cast<int>(mu.size());
   lw.resize(static_cast<std::size_t>(xi.cols()));
   Eigen::VectorXd y(mu.size());
   for (Eigen::Index j = 0; j < xi.cols(); ++j) {
@@ -130,7 +134,9 @@ double log_psi_hat(const HimmelblauProblem& pb, const HimmelblauLaplace& lp,
     lp.factor.upper_solve_in_place(y);
     y += mu;
     lw[static_cast<std::size_t>(j)] =
-        -himmelblau_path_function(pb, lp.x, y) + 0.5 * xi.col(j).squaredNorm() - log_norm;
+        implicit_log_weight(m, xi.col(j).squaredNorm(), himmelblau_path_function(pb, lp.x, y),
+                            lp.log_det_L) -
+        log_path_norm;
   }
   return log_mean_exp(lw);
 }
