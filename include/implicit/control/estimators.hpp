@@ -115,7 +115,8 @@ PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
     for (int j = 0; j < M; ++j) {
       rng.fill_normal(xi);
       const double rho = xi.squaredNorm();
-      d = xi / std::sqrt(rho);
+      // Into d's storage (same size; a resizing assignment trips GCC 12's -Wuse-after-free).
+      d.array() = xi.array() / std::sqrt(rho);
       r.factor.upper_solve_in_place(d);
       const double level = r.value + 0.5 * rho;
       double lambda = 0.0, slope = 0.0;
