@@ -226,6 +226,7 @@ inline NewtonOptions mcl_newton_options() {
   o.armijo = 1e-4;
   o.max_backtracks = 40;
   o.fallback = HessianFallback::kGaussNewton;
+  o.damping = false;  // nothing SPD: the proposal samples the prior, a start of the cover is lost
   return o;
 }
 
