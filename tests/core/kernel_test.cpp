@@ -140,6 +140,33 @@ TEST(NewtonMinimize, GaussNewtonFallbackReachesTheMinimumAndFactorsTheExactHessi
   EXPECT_LT(r.gradient.cwiseAbs().maxCoeff(), 1e-9);
 }
 
+// Without damping, a point where neither the exact nor the Gauss-Newton Hessian factors ends the
+// minimisation there (x is kept); with damping (the default) Levenberg carries it to the minimum.
+TEST(NewtonMinimize, WithoutDampingAPointWithNoSpdHessianIsReported) {
+  struct Saddle {  // F = x0^4 / 4 - x0^2 / 2 + |x_12|^2 / 2: H_00 = -1 at 0, minima at x0 = +-1
+    double evaluate(const Vec<3>& x, Vec<3>* g, Mat<3>* h, Mat<3>* gn = nullptr) const {
+      if (g) *g = Vec<3>(x(0) * x(0) * x(0) - x(0), x(1), x(2));
+      if (h) *h = Vec<3>(3.0 * x(0) * x(0) - 1.0, 1.0, 1.0).asDiagonal();
+      if (gn) *gn = Vec<3>(-1.0, 1.0, 1.0).asDiagonal();  // not SPD either
+      return 0.25 * std::pow(x(0), 4) - 0.5 * x(0) * x(0) + 0.5 * x.tail<2>().squaredNorm();
+    }
+  };
+  NewtonOptions o;
+  o.fallback = HessianFallback::kGaussNewton;
+  const Vec<3> start(0.1, 0.5, -0.5);
+  o.damping = false;
+  const auto stopped = newton_minimize<SmallFactor<3>>(Saddle{}, start, o);
+  EXPECT_EQ(stopped.status, MinimizeStatus::kNotPositiveDefinite);
+  EXPECT_FALSE(stopped.factor_ok);
+  EXPECT_EQ(stopped.x, start);
+  EXPECT_EQ(stopped.iterations, 0);
+  o.damping = true;
+  const auto damped = newton_minimize<SmallFactor<3>>(Saddle{}, start, o);
+  EXPECT_EQ(damped.status, MinimizeStatus::kConverged);
+  EXPECT_NEAR(std::abs(damped.x(0)), 1.0, 1e-9);
+  EXPECT_TRUE(damped.exact_factor);
+}
+
 // A banded path F = sum_i 1/2 (y_i - y_{i-1})^2 + sum_i cosh(y_i - t_i) with equalities
 // y_2 = 0.5 and y_5 = -1: the KKT conditions grad F + C nu = 0, C^T y = e are the oracle.
 struct CoshChain {

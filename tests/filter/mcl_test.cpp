@@ -76,17 +76,17 @@ TEST(MclOracle, CaseA) {
       -14283.4859080862, 4461.8076973143, -14283.4859080862, 58216.5213328328;
   expect_rel(h.reshaped(), h_ref.reshaped(), 1e-8, "hessian at x2");
 
-  const NewtonResult r = minimize_newton(f, fj);
-  ASSERT_TRUE(r.ok && r.converged);
-  EXPECT_FALSE(r.gauss_newton_at_minimum);
-  expect_rel(r.mu, Vec<3>(10.0667353158, 5.028063506, 0.3018870747), 1e-9, "mu");
-  EXPECT_NEAR(r.phi, 0.011911716008, 1e-8 * 0.0119);
-  EXPECT_NEAR(r.log_det_L, 10.545986532115, 1e-8 * 10.5);
+  const PoseMinimum r = newton_minimize<SmallFactor<3>>(f, fj, mcl_newton_options());
+  ASSERT_TRUE(usable(r) && r.converged());
+  EXPECT_TRUE(r.exact_factor);
+  expect_rel(r.x, Vec<3>(10.0667353158, 5.028063506, 0.3018870747), 1e-9, "mu");
+  EXPECT_NEAR(r.value, 0.011911716008, 1e-8 * 0.0119);
+  EXPECT_NEAR(r.factor.log_det_L(), 10.545986532115, 1e-8 * 10.5);
   Mat3 l_ref;
   l_ref << 22.4559423206, 0, 0, -47.874846178, 36.9881312124, 0, 198.7694811942, -128.8854582146,
       45.7793986354;
-  expect_rel(r.L.reshaped(), l_ref.reshaped(), 1e-8, "L");
-  EXPECT_LE(r.iterations, 8);  // spec §3.9: 4-5 Newton iterations
+  expect_rel(r.factor.matrixL().reshaped(), l_ref.reshaped(), 1e-8, "L");
+  EXPECT_LE(r.evaluations, 8);  // spec §3.9: 4-5 Newton iterations
 }
 
 TEST(MclOracle, CaseBDerivativesAndMinimiser) {
@@ -117,11 +117,11 @@ TEST(MclOracle, CaseBDerivativesAndMinimiser) {
       -55.1212903694, 77.215854536, 1145.9155902616;
   expect_rel(h.reshaped(), h_ref.reshaped(), 1e-8, "term hessian");
 
-  const NewtonResult r = minimize_newton(f, f.prediction());
-  ASSERT_TRUE(r.ok && r.converged);
-  expect_rel(r.mu, Vec<3>(10.0180469054, 5.0788693051, 0.3187026551), 1e-9, "mu");
-  EXPECT_NEAR(r.phi, 0.543789188458, 1e-8);
-  EXPECT_NEAR(r.log_det_L, 10.869741220601, 1e-8 * 10.9);
+  const PoseMinimum r = newton_minimize<SmallFactor<3>>(f, f.prediction(), mcl_newton_options());
+  ASSERT_TRUE(usable(r) && r.converged());
+  expect_rel(r.x, Vec<3>(10.0180469054, 5.0788693051, 0.3187026551), 1e-9, "mu");
+  EXPECT_NEAR(r.value, 0.543789188458, 1e-8);
+  EXPECT_NEAR(r.factor.log_det_L(), 10.869741220601, 1e-8 * 10.9);
 }
 
 TEST(MclOracle, HessianMatchesAutodiff) {
@@ -293,10 +293,10 @@ TEST(ImplicitProposal, FastPathsGiveTheSameUpdateAsTheInterfaces) {
   }
 }
 
-TEST(Cholesky3, MatchesEigenAndRejectsNonSpd) {
+TEST(SmallFactor3, MatchesEigenAndRejectsNonSpd) {
   Mat3 a;
   a << 4.0, 1.0, 0.5, 1.0, 3.0, -0.2, 0.5, -0.2, 2.0;
-  Cholesky3 c;
+  SmallFactor<3> c;
   ASSERT_TRUE(c.compute(a));
   const Eigen::LLT<Mat3> ref(a);
   EXPECT_LE((c.matrixL() - Mat3(ref.matrixL())).cwiseAbs().maxCoeff(), 1e-15);

@@ -77,10 +77,11 @@ TEST(ImplicitSlam, WithKnownMapReducesToImplicitMcl) {
         obj.add(d.landmarks[static_cast<std::size_t>(o.landmark)], o.z);
         obj.add_constant(half_log_det_2pi_r);
       }
-      const filter::NewtonResult nr = filter::minimize_newton(obj, f);
-      ASSERT_TRUE(nr.ok);
-      x[j] = nr.mu + nr.L.transpose().triangularView<Eigen::Upper>().solve(xi);
-      inc[j] = 1.5 * kLog2Pi - nr.log_det_L + 0.5 * xi.squaredNorm() - obj.evaluate(x[j]);
+      const filter::PoseMinimum nr =
+          newton_minimize<SmallFactor<3>>(obj, f, filter::mcl_newton_options());
+      ASSERT_TRUE(filter::usable(nr));
+      x[j] = nr.x + nr.factor.matrixL().transpose().triangularView<Eigen::Upper>().solve(xi);
+      inc[j] = 1.5 * kLog2Pi - nr.factor.log_det_L() + 0.5 * xi.squaredNorm() - obj.evaluate(x[j]);
     }
     for (std::size_t j = 0; j < m; ++j) log_w[j] += inc[j];
     const WeightSummary ws = normalize_log_weights(log_w, w);

@@ -53,6 +53,10 @@ struct NewtonOptions : MinimizeOptions {
   double decrement_tolerance = 0.0;     ///< stop when g^T H^-1 g < this (0: rule off)
   double final_step = 0.0;  ///< stop after a full exact step with max|step| <= this (0: off)
   HessianFallback fallback = HessianFallback::kLevenberg;
+  /// false: no Levenberg damping and no steepest descent; a point where neither the exact nor the
+  /// Gauss-Newton Hessian factors ends the minimisation (kNotPositiveDefinite), for callers with a
+  /// better plan than a damped minimum (implicit MCL samples its prior instead).
+  bool damping = true;
 
   NewtonOptions() = default;
   explicit NewtonOptions(const MinimizeOptions& base) : MinimizeOptions(base) {}
@@ -129,10 +133,11 @@ bool finite(const V& v) {
 /// Returns false when nothing factors; `exact` says which matrix the factor holds.
 template <typename Factor, typename H>
 bool factor_with_fallback(Factor& factor, const H& exact_h, const H* gauss_newton, H& damped,
-                          bool& exact) {
+                          bool& exact, bool damping = true) {
   exact = factor.compute(exact_h);
   if (exact) return true;
   if (gauss_newton != nullptr && factor.compute(*gauss_newton)) return true;
+  if (!damping) return false;
   double lambda = 1e-8 * std::max(1.0, Factor::diagonal_scale(exact_h));
   for (int k = 0; k < 40; ++k, lambda *= 10.0) {
     damped = exact_h;
@@ -227,8 +232,9 @@ NewtonMinimum<Factor> newton_minimize(
     return std::isfinite(r.value) && r.gradient.allFinite() && detail::finite(r.hessian);
   };
   auto factor_here = [&] {
-    r.factor_ok = detail::factor_with_fallback(
-        r.factor, r.hessian, use_gn ? &w.gauss_newton : nullptr, w.damped, r.exact_factor);
+    r.factor_ok =
+        detail::factor_with_fallback(r.factor, r.hessian, use_gn ? &w.gauss_newton : nullptr,
+                                     w.damped, r.exact_factor, options.damping);
     if (r.factor_ok && m > 0) r.factor_ok = proj.compute(*constraints, r.factor);
     return r.factor_ok;
   };
@@ -251,7 +257,7 @@ NewtonMinimum<Factor> newton_minimize(
   r.status = MinimizeStatus::kMaxIterations;
   for (;;) {
     factor_current = true;
-    if (!factor_here() && m > 0) {
+    if (!factor_here() && (m > 0 || !options.damping)) {
       r.status = MinimizeStatus::kNotPositiveDefinite;
       break;
     }

@@ -107,7 +107,7 @@ struct GlobalInitOptions {
   /// components keeps the weights exact (any mixture is a valid proposal).
   double max_log_weight_gap = 40.0;
   int max_reassociations = 4;  ///< polishing rounds (re-associate at the minimum, Newton again)
-  NewtonOptions newton;
+  NewtonOptions newton = mcl_newton_options();
 };
 
 struct GlobalInitStats {
@@ -167,7 +167,7 @@ void build_objective(const Ctx& ctx, std::span<const int> assoc,
 /// Returns false when the start is skipped (too few detections) or gives no usable minimum.
 template <typename Ctx>
 bool newton_from_start(const Ctx& ctx, const Pose& x0, const Mat3& cover_cov,
-                       const GlobalInitOptions& o, NewtonResult& out, bool& skipped) {
+                       const GlobalInitOptions& o, PoseMinimum& out, bool& skipped) {
   constexpr std::size_t kMax = MclObjective<typename Ctx::SensorType>::kMaxTerms;
   // F holds at most kMax terms: further detections enter phi as clutter (the modes are only a
   // proposal, so this costs efficiency, never exactness).
@@ -183,19 +183,19 @@ bool newton_from_start(const Ctx& ctx, const Pose& x0, const Mat3& cover_cov,
   int evaluations = 0;
   for (int round = 0;; ++round) {
     build_objective(head, assoc, obj);
-    out = minimize_newton(obj, start, o.newton);
-    evaluations += out.iterations;
-    if (!out.ok || !out.converged || round >= o.max_reassociations) break;
-    associate_all(head, out.mu, nullptr, next);
+    out = newton_minimize<SmallFactor<3>>(obj, start, o.newton);
+    evaluations += out.evaluations;
+    if (!usable(out) || !out.converged() || round >= o.max_reassociations) break;
+    associate_all(head, out.x, nullptr, next);
     if (std::equal(assoc.begin(), assoc.end(), next.begin())) break;
     std::copy(next.begin(), next.end(), assoc.begin());
-    start = out.mu;
+    start = out.x;
   }
-  out.iterations = evaluations;
+  out.evaluations = evaluations;
   if (ctx.z.size() > n && ctx.association.clutter)  // the detections F could not hold
-    out.phi -= static_cast<double>(ctx.z.size() - n) * ctx.log_clutter;
-  out.mu(2) = wrap_angle(out.mu(2));
-  return out.ok && out.converged && out.mu.allFinite() && std::isfinite(out.phi);
+    out.value -= static_cast<double>(ctx.z.size() - n) * ctx.log_clutter;
+  out.x(2) = wrap_angle(out.x(2));
+  return usable(out) && out.converged() && out.x.allFinite() && std::isfinite(out.value);
 }
 
 /// The density of a wrapped draw of a Gaussian mixture on R^3: the heading of x lies in
@@ -305,7 +305,7 @@ std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
   const std::size_t starts = nx * ny * nh;
   const double dh = kPi / static_cast<double>(nh);
   const Mat3 cover_cov = Vec<3>(s * s, s * s, dh * dh).asDiagonal();
-  std::vector<NewtonResult> found(starts);
+  std::vector<PoseMinimum> found(starts);
   std::vector<unsigned char> status(starts, 0);  // 0 no minimum, 1 skipped, 2 minimum
   parallel_for(
       starts,
@@ -317,36 +317,36 @@ std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
                       -kPi + 2.0 * dh * static_cast<double>(ih));
         bool skipped = false;
         const bool ok = detail::newton_from_start(ctx, x0, cover_cov, o, found[i], skipped);
-        status[i] = skipped ? 1 : (ok && b.contains(found[i].mu) ? 2 : 0);
+        status[i] = skipped ? 1 : (ok && b.contains(found[i].x) ? 2 : 0);
       },
       4);
   GlobalInitStats st;
   st.starts = starts;
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < starts; ++i) {
-    st.evaluations += found[i].iterations;
+    st.evaluations += found[i].evaluations;
     st.skipped += status[i] == 1 ? 1 : 0;
     if (status[i] != 2) continue;
     ++st.converged;
     // H^-1 = L^-T L^-1, so Var(heading) = 1 / L_22^2.
-    if (1.0 / found[i].L(2, 2) > detail::kMaxHeadingStd)
+    if (1.0 / found[i].factor.matrixL()(2, 2) > detail::kMaxHeadingStd)
       ++st.degenerate;
     else
       order.push_back(i);
   }
   // Lowest phi first; ties by start index, so the result does not depend on the thread count.
   std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t i, std::size_t j) { return found[i].phi < found[j].phi; });
+                   [&](std::size_t i, std::size_t j) { return found[i].value < found[j].value; });
   double best_log_weight = -std::numeric_limits<double>::infinity();  // max of -phi - log det L
   for (const std::size_t i : order)
-    best_log_weight = std::max(best_log_weight, -found[i].phi - found[i].log_det_L);
+    best_log_weight = std::max(best_log_weight, -found[i].value - found[i].factor.log_det_L());
   std::vector<Laplace<3>> modes;
   for (const std::size_t i : order) {
     const bool duplicate = std::any_of(modes.begin(), modes.end(), [&](const Laplace<3>& m) {
-      return detail::pose_distance(m.mu, found[i].mu) < o.merge_distance;
+      return detail::pose_distance(m.mu, found[i].x) < o.merge_distance;
     });
     if (duplicate) continue;
-    if (-found[i].phi - found[i].log_det_L < best_log_weight - o.max_log_weight_gap) {
+    if (-found[i].value - found[i].factor.log_det_L() < best_log_weight - o.max_log_weight_gap) {
       ++st.negligible;
       continue;
     }
@@ -355,10 +355,10 @@ std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
       continue;
     }
     Laplace<3> lp;
-    lp.mu = found[i].mu;
-    lp.phi = found[i].phi;
-    lp.L = found[i].L;
-    lp.log_det_L = found[i].log_det_L;
+    lp.mu = found[i].x;
+    lp.phi = found[i].value;
+    lp.L = found[i].factor.matrixL();
+    lp.log_det_L = found[i].factor.log_det_L();
     modes.push_back(lp);
   }
   st.modes = modes.size();

@@ -11,24 +11,25 @@
 //   MclObjective<RangeBearingSensor> f;
 //   f.reset(sensor, noise_information, prediction, prior_information, constant);
 //   f.add(landmark, z);                       // one term per associated detection
-//   NewtonResult r = minimize_newton(f, prediction);   // mu, phi, L with H = L L^T
+//   PoseMinimum r = newton_minimize<SmallFactor<3>>(f, prediction, mcl_newton_options());
+//   // r.x = mu, r.value = phi, r.factor: H = L L^T (usable(r): fit to sample)
 //
-// The minimiser is a hand-written 3-D Newton on fixed-size matrices rather than the generic
-// core::minimize: it runs once per particle per laser update (hundreds of thousands of times per
-// run), and avoiding the generic target wrapper, Levenberg retries and dynamic checks makes it
-// several times faster. Exact Hessian when the sensor provides second derivatives; whenever its
-// Cholesky fails (round-off, or far from the minimum where the residual terms make it indefinite),
-// the Gauss-Newton Hessian (always SPD) is used instead - for the Newton step, and at the minimum
-// for the sampling matrix L, so sampling and weight always use the same L.
+// F is minimised by the kernel's Newton (core/newton.hpp) on fixed-size matrices (SmallFactor<3>,
+// no heap): it runs once per particle per laser update. Exact Hessian when the sensor provides
+// second derivatives; whenever its Cholesky fails (round-off, or far from the minimum where the
+// residual terms make it indefinite), the Gauss-Newton Hessian that evaluate() also returns
+// (always SPD with a prior) is used instead - for the Newton step, and at the minimum for the
+// sampling matrix L, so sampling and weight always use the same L.
 //
 // Common mistakes: dropping the 1/2 (samples p^2, spec E22), sharing one Sigma1 between particles
 // (E23), forgetting -log det L in the weight (E24).
 
 #include <array>
 #include <cmath>
-#include <limits>
 #include <type_traits>
 
+#include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/newton.hpp"
 #include "implicit/core/types.hpp"
 #include "implicit/core/weights.hpp"
 #include "implicit/robot/models.hpp"
@@ -204,164 +205,35 @@ class MclObjective {
   std::array<Measurement, kMaxTerms> measurements_;
 };
 
-/// Cholesky factorisation A = L L^T of a 3x3 symmetric positive definite matrix, written out.
-/// The implicit proposal factors several 3x3 matrices per particle per step; Eigen's general LLT
-/// (runtime loops, out-of-line) costs a few times more. Reads the lower triangle of A. Unlike
-/// Eigen's LLT it rejects NaN pivots.
-class Cholesky3 {
- public:
-  /// Factors a; false (and the factor is unusable) when a is not numerically positive definite.
-  bool compute(const Mat3& a) {
-    const double d0 = a(0, 0);
-    if (!(d0 > 0.0) || !std::isfinite(d0)) return false;
-    const double l00 = std::sqrt(d0);
-    const double l10 = a(1, 0) / l00, l20 = a(2, 0) / l00;
-    const double d1 = a(1, 1) - l10 * l10;
-    if (!(d1 > 0.0)) return false;
-    const double l11 = std::sqrt(d1);
-    const double l21 = (a(2, 1) - l20 * l10) / l11;
-    const double d2 = a(2, 2) - l20 * l20 - l21 * l21;
-    if (!(d2 > 0.0) || !std::isfinite(d2)) return false;
-    l_ << l00, 0.0, 0.0, l10, l11, 0.0, l20, l21, std::sqrt(d2);
-    return true;
-  }
-  const Mat3& matrixL() const { return l_; }
-  /// log det L = 1/2 log det A (one log of the product; the diagonal is far from over/underflow
-  /// for any covariance or information matrix of a pose).
-  double log_det_L() const { return std::log(l_(0, 0) * l_(1, 1) * l_(2, 2)); }
-  /// L y = b.
-  Vec<3> solve_lower(const Vec<3>& b) const {
-    const double y0 = b(0) / l_(0, 0);
-    const double y1 = (b(1) - l_(1, 0) * y0) / l_(1, 1);
-    const double y2 = (b(2) - l_(2, 0) * y0 - l_(2, 1) * y1) / l_(2, 2);
-    return Vec<3>(y0, y1, y2);
-  }
-  /// L^T x = y.
-  Vec<3> solve_upper(const Vec<3>& y) const {
-    const double x2 = y(2) / l_(2, 2);
-    const double x1 = (y(1) - l_(2, 1) * x2) / l_(1, 1);
-    const double x0 = (y(0) - l_(1, 0) * x1 - l_(2, 0) * x2) / l_(0, 0);
-    return Vec<3>(x0, x1, x2);
-  }
-  /// A x = b.
-  Vec<3> solve(const Vec<3>& b) const { return solve_upper(solve_lower(b)); }
-  /// A^-1 = L^-T L^-1, for when the inverse itself is the wanted quantity (an information matrix
-  /// from a covariance), by solves with the factor.
-  Mat3 inverse() const {
-    Mat3 inv;
-    for (int k = 0; k < 3; ++k) inv.col(k) = solve(Vec<3>::Unit(k));
-    return inv;
-  }
+/// The Gaussian approximation at the minimum that both maps use: mu = x, phi = value (constants
+/// included), and the factor H = L L^T used at mu (exact Hessian, else Gauss-Newton:
+/// !exact_factor). `evaluations` counts every evaluation of F.
+using PoseMinimum = NewtonMinimum<SmallFactor<3>>;
 
- private:
-  Mat3 l_ = Mat3::Identity();
-};
+/// The stopping rules of implicit MCL (spec §3.3) for newton_minimize<SmallFactor<3>>: an absolute
+/// step tolerance of 1e-12 and no gradient rule; the Gauss-Newton Hessian (always SPD with a
+/// prior) whenever the exact one is not SPD; and `final_step`: after a full exact-Newton step no
+/// larger than 1e-5, stop, since convergence is quadratic and the next step (~1e-10 relative) is
+/// below anything the weights or the 1e-8 oracles of spec §3.7 can see, yet would cost an
+/// evaluation. This runs once per particle per laser update.
+inline NewtonOptions mcl_newton_options() {
+  NewtonOptions o;
+  o.max_iterations = 50;
+  o.gradient_tolerance = 0.0;
+  o.step_tolerance = 1e-12;
+  o.relative_step_tolerance = false;
+  o.final_step = 1e-5;
+  o.armijo = 1e-4;
+  o.max_backtracks = 40;
+  o.fallback = HessianFallback::kGaussNewton;
+  o.damping = false;  // nothing SPD: the proposal samples the prior, a start of the cover is lost
+  return o;
+}
 
-struct NewtonOptions {
-  int max_iterations = 50;
-  double step_tolerance = 1e-12;  ///< stop when max|step| <= this (spec §3.3)
-  /// After a full exact-Newton step no larger than this has been taken (and its point evaluated),
-  /// stop: convergence is quadratic, so the next step would be ~1e-10 relative - below anything
-  /// the weights or the 1e-8 oracles of spec §3.7 can see - and computing it costs an evaluation.
-  double final_step = 1e-5;
-  double armijo = 1e-4;
-  int max_backtracks = 40;
-};
-
-/// The Gaussian approximation at the minimum that both maps use.
-struct NewtonResult {
-  Pose mu = Pose::Zero();
-  double phi = std::numeric_limits<double>::quiet_NaN();  ///< F(mu), constants included
-  Mat3 L = Mat3::Identity();  ///< lower Cholesky factor of the Hessian used at mu
-  double log_det_L = 0.0;
-  int iterations = 0;                    ///< objective evaluations with derivatives
-  bool gauss_newton_at_minimum = false;  ///< exact Hessian not SPD at mu: Gauss-Newton used
-  bool converged = false;
-  bool ok = false;  ///< false: F not finite at the start, or no SPD Hessian (do not sample)
-};
-
-/// Damped Newton from `start` (use the prediction f^j). Never throws.
-///
-/// Cost control (this runs once per particle per laser update): every trial point is evaluated
-/// with its derivatives, so an accepted step (the usual case) needs no second evaluation; a small
-/// exact-Newton step ends the iteration (NewtonOptions::final_step); and a failed Armijo test at
-/// the round-off floor of F stops at once instead of backtracking 40 times.
-template <typename Objective>
-NewtonResult minimize_newton(const Objective& f, const Pose& start, const NewtonOptions& opt = {}) {
-  NewtonResult r;
-  Pose x = start;
-  Vec<3> g;
-  Mat3 h, hgn;
-  double fx = f.evaluate(x, &g, &h, &hgn);
-  r.iterations = 1;
-  if (!std::isfinite(fx) || !g.allFinite() || !hgn.allFinite()) return r;
-  Cholesky3 chol;
-  bool exact = false;    // chol factors the exact Hessian (else the Gauss-Newton one)
-  bool current = false;  // chol factors a Hessian at x (not at an earlier point)
-  for (int it = 0; it < opt.max_iterations; ++it) {
-    exact = chol.compute(h);
-    if (!exact && !chol.compute(hgn)) return r;
-    current = true;
-    const Vec<3> step = -chol.solve(g);
-    if (!step.allFinite()) return r;
-    const double size = step.cwiseAbs().maxCoeff();
-    if (size <= opt.step_tolerance) {
-      r.converged = true;
-      break;
-    }
-    const double slope = g.dot(step);
-    double t = 1.0;
-    bool accepted = false, floor = false;
-    Pose xn;
-    Vec<3> gn;
-    Mat3 hn, hgnn;
-    double fn = 0.0;
-    for (int k = 0; k <= opt.max_backtracks; ++k, t *= 0.5) {
-      xn = x + t * step;
-      fn = f.evaluate(xn, &gn, &hn, &hgnn);
-      ++r.iterations;
-      // A non-finite F (Newton stepped onto a landmark) is a failed trial step.
-      if (std::isfinite(fn) && fn <= fx + opt.armijo * t * slope) {
-        accepted = true;
-        break;
-      }
-      // Both the change of F and the predicted decrease are at round-off: no point backtracking.
-      const double ulp = 8.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(fx));
-      if (std::isfinite(fn) && std::abs(fn - fx) <= ulp && -slope * t <= ulp) {
-        floor = true;
-        break;
-      }
-    }
-    if (!accepted) {
-      // No decrease: at the round-off floor of F near the minimum (or a kink of the wrapped
-      // bearing). Keep x; it is as good a centre as any (the weights stay exact). chol still
-      // factors the Hessian at x.
-      r.converged = floor || size < 1e-6;
-      break;
-    }
-    const double moved = t * size;
-    current = false;
-    x = xn;
-    fx = fn;
-    g = gn;
-    h = hn;
-    hgn = hgnn;
-    if (moved <= opt.step_tolerance || (exact && t == 1.0 && size <= opt.final_step)) {
-      r.converged = true;
-      break;
-    }
-  }
-  r.mu = x;
-  r.phi = fx;
-  if (!current) {  // ended right after a move: factor at mu, Gauss-Newton if H is not SPD there
-    exact = chol.compute(h);
-    if (!exact && !chol.compute(hgn)) return r;
-  }
-  r.gauss_newton_at_minimum = !exact;
-  r.L = chol.matrixL();
-  r.log_det_L = chol.log_det_L();
-  r.ok = std::isfinite(r.log_det_L) && std::isfinite(r.phi);
-  return r;
+/// True when the minimum can centre the maps: F finite at mu and an SPD factor there.
+inline bool usable(const PoseMinimum& r) {
+  return r.factor_ok && r.status != MinimizeStatus::kNonFinite && std::isfinite(r.value) &&
+         std::isfinite(r.factor.log_det_L());
 }
 
 }  // namespace implicit::filter

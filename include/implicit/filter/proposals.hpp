@@ -30,6 +30,8 @@
 
 #include <Eigen/Cholesky>
 
+#include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/filter/mcl_objective.hpp"
 #include "implicit/robot/data_association.hpp"
@@ -79,7 +81,7 @@ namespace detail {
 /// finite.
 template <typename Motion>
 bool predict(const Motion& motion, const Pose& previous, const Control& u, Pose& f, Mat3& sigma1,
-             Cholesky3& sigma1_factor) {
+             SmallFactor<3>& sigma1_factor) {
   if constexpr (robot::MotionModelWithCovariance<Motion>) {
     motion.predict_with_covariance(previous, u, f, sigma1);
   } else {
@@ -169,7 +171,7 @@ struct BootstrapProposal {
                  Pose& next, ParticleStats& st) const {
     Pose f;
     Mat3 sigma1_full;
-    Cholesky3 sigma1;
+    SmallFactor<3> sigma1;
     if (!detail::predict(*ctx.motion, previous, ctx.u, f, sigma1_full, sigma1)) {
       st.failed = true;
       next = previous;
@@ -194,7 +196,7 @@ struct ImplicitProposal {
   static constexpr std::string_view kName = "implicit";
 
   ImplicitMap map = ImplicitMap::kLinear;
-  NewtonOptions newton;
+  NewtonOptions newton = mcl_newton_options();
 
   template <typename Motion, typename Sensor>
   double propose(const ProposalContext<Motion, Sensor>& ctx, const Pose& previous, Rng& rng,
@@ -202,7 +204,7 @@ struct ImplicitProposal {
     constexpr double kNegInf = -std::numeric_limits<double>::infinity();
     Pose f;
     Mat3 sigma1_full;
-    Cholesky3 sigma1;
+    SmallFactor<3> sigma1;
     if (!detail::predict(*ctx.motion, previous, ctx.u, f, sigma1_full, sigma1)) {
       st.failed = true;
       next = previous;
@@ -229,10 +231,10 @@ struct ImplicitProposal {
       ++st.used;
       obj.add_constant(per_term);
     }
-    const NewtonResult nr = minimize_newton(obj, f, newton);
-    st.iterations += nr.iterations;
-    st.fallback = st.fallback || nr.gauss_newton_at_minimum;
-    if (!nr.ok) {
+    const PoseMinimum nr = newton_minimize<SmallFactor<3>>(obj, f, newton);
+    st.iterations += nr.evaluations;
+    st.fallback = st.fallback || !nr.exact_factor;
+    if (!usable(nr)) {
       // No usable Gaussian approximation (F not finite at the prediction): sample the prior and
       // weight by the likelihood, the bootstrap fallback, which is still a valid proposal.
       st.fallback = true;
@@ -245,72 +247,19 @@ struct ImplicitProposal {
       // Prior density terms: F - constant - 1/2|xi|^2 is the negative log likelihood.
       return lw + 0.5 * xi.squaredNorm();
     }
+    // The kernel's maps and weight (spec §1.2, §1.3) with the factor used at mu.
+    double log_w = kNegInf;
     if (map == ImplicitMap::kLinear) {
-      next = nr.mu + upper_solve(nr.L, xi);
-      const double fx = obj.evaluate(next);
-      if (!std::isfinite(fx)) {
-        st.failed = true;
-        return kNegInf;
-      }
-      return 1.5 * kLog2Pi - nr.log_det_L + 0.5 * xi.squaredNorm() - fx;
+      log_w = linear_map(obj, nr.x, nr.factor, xi, next);
+    } else if (implicit::random_map(obj, nr.x, nr.value, nr.factor, xi, next, log_w) !=
+               RayStatus::kOk) {
+      next = nr.x;  // weight zero: no root on the ray
     }
-    return random_map(obj, nr, xi, next, st);
-  }
-
- private:
-  /// L^-T v for a lower-triangular 3x3 L, written out (Eigen's triangular solve is out of line).
-  static Vec<3> upper_solve(const Mat3& l, const Vec<3>& v) {
-    const double x2 = v(2) / l(2, 2);
-    const double x1 = (v(1) - l(2, 1) * x2) / l(1, 1);
-    const double x0 = (v(0) - l(1, 0) * x1 - l(2, 0) * x2) / l(0, 0);
-    return Vec<3>(x0, x1, x2);
-  }
-
-  /// Random map (spec §1.3): X = mu + lambda L^-T eta, F(X) - phi = rho / 2.
-  template <typename Objective>
-  static double random_map(const Objective& obj, const NewtonResult& nr, const Vec<3>& xi,
-                           Pose& next, ParticleStats& st) {
-    constexpr double kNegInf = -std::numeric_limits<double>::infinity();
-    const double rho = xi.squaredNorm();
-    const Vec<3> d = upper_solve(nr.L, xi / std::sqrt(rho));
-    auto g = [&](double lambda) { return obj.evaluate(nr.mu + lambda * d) - nr.phi - 0.5 * rho; };
-    double lo = 0.0, hi = std::sqrt(rho);
-    int k = 0;
-    for (; k < 60 && !(g(hi) > 0.0); ++k) {
-      lo = hi;
-      hi *= 2.0;
-    }
-    if (k == 60) {
-      st.failed = true;
-      next = nr.mu;
-      return kNegInf;
-    }
-    double lambda = 0.5 * (lo + hi);
-    for (int it = 0; it < 100; ++it) {
-      Vec<3> grad;
-      const double val = obj.evaluate(nr.mu + lambda * d, &grad) - nr.phi - 0.5 * rho;
-      if (val > 0.0)
-        hi = lambda;
-      else
-        lo = lambda;
-      const double slope = grad.dot(d);
-      double next_lambda = slope > 0.0 ? lambda - val / slope : 0.5 * (lo + hi);
-      if (!(next_lambda > lo && next_lambda < hi)) next_lambda = 0.5 * (lo + hi);  // safeguard
-      const bool done = std::abs(next_lambda - lambda) <= 1e-12 * lambda;
-      lambda = next_lambda;
-      if (done || hi - lo <= 1e-14 * hi) break;
-    }
-    next = nr.mu + lambda * d;
-    Vec<3> grad;
-    obj.evaluate(next, &grad);
-    const double slope = std::abs(grad.dot(d));
-    if (!(slope > 0.0) || !std::isfinite(slope)) {
+    if (!std::isfinite(log_w)) {
       st.failed = true;
       return kNegInf;
     }
-    // log w = (m/2) log 2pi - phi - log det L + (1 - m/2) log rho + (m-1) log lambda - log|grad.d|
-    return 1.5 * kLog2Pi - nr.phi - nr.log_det_L - 0.5 * std::log(rho) + 2.0 * std::log(lambda) -
-           std::log(slope);
+    return log_w;
   }
 };
 
