@@ -18,6 +18,7 @@
 #include <limits>
 #include <string_view>
 
+#include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/laplace.hpp"
 #include "implicit/core/target.hpp"
 
@@ -43,12 +44,6 @@ inline std::string_view to_string(RandomMapStatus s) {
   }
   return "unknown";
 }
-
-struct RandomMapOptions {
-  double relative_tolerance = 1e-12;
-  int max_iterations = 200;
-  int max_doublings = 200;
-};
 
 /// Solves the scalar equation for `xi`, writes X to `x` and log w to `log_weight`.
 /// On failure the sample gets log w = -inf and the status says why (never throws).
