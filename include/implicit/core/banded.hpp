@@ -11,10 +11,12 @@
 
 #include <concepts>
 #include <limits>
+#include <utility>
 
 #include <Eigen/Core>
 
 #include "implicit/core/block_tridiagonal.hpp"
+#include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/minimize.hpp"
 #include "implicit/core/newton.hpp"
 #include "implicit/core/types.hpp"
@@ -50,56 +52,36 @@ struct BandedMinimizeResult {
   bool converged() const { return status == MinimizeStatus::kConverged; }
 };
 
-/// Damped Newton (Levenberg damping + Armijo backtracking, as minimize()) for a banded target.
-/// O(n B^3) per iteration. Never throws on algorithm failure; see `status`.
+/// minimize() for a banded target: newton_minimize<BandedFactor<B>> with the stopping rules of
+/// `options`, O(n B^3) per iteration. `factor` is the Cholesky of the exact Hessian at the end
+/// (not ok() where that is not SPD, and then a converged run reports kNotPositiveDefinite). A start
+/// point of the wrong size is kNonFinite. Never throws on algorithm failure; see `status`.
 template <BandedTarget T>
 BandedMinimizeResult<T::Block> minimize_banded(const T& f, const Eigen::VectorXd& x0,
                                                const MinimizeOptions& options = {}) {
   constexpr int B = T::Block;
   const int nb = f.num_blocks();
   BandedMinimizeResult<B> r;
-  r.x = x0;
-  r.gradient.resize(nb * B);
-  r.hessian.resize(nb);
   if (x0.size() != nb * B || nb <= 0) {
+    r.x = x0;
+    r.gradient.resize(nb * B);
+    r.hessian.resize(nb);
     r.status = MinimizeStatus::kNonFinite;
     return r;
   }
-  r.value = f.evaluate(r.x, &r.gradient, &r.hessian);
-  r.evaluations = 1;
-  if (!std::isfinite(r.value) || !r.gradient.allFinite() || !r.hessian.all_finite()) {
-    r.status = MinimizeStatus::kNonFinite;
-    return r;
-  }
-  BlockTridiagonal<B> damped;
-  Eigen::VectorXd step(nb * B), trial(nb * B);
-  r.status = MinimizeStatus::kMaxIterations;
-  for (r.iterations = 0; r.iterations < options.max_iterations; ++r.iterations) {
-    if (r.gradient.cwiseAbs().maxCoeff() <= options.gradient_tolerance) {
-      r.status = MinimizeStatus::kConverged;
-      break;
-    }
-    bool factored = r.factor.compute(r.hessian);
-    if (!factored) {
-      double scale = 1.0;
-      for (const auto& d : r.hessian.diagonal)
-        scale = std::max(scale, d.diagonal().cwiseAbs().maxCoeff());
-      double lambda = 1e-8 * scale;
-      for (int k = 0; k < 40 && !factored; ++k, lambda *= 10.0) {
-        damped = r.hessian;
-        damped.add_to_diagonal(lambda);
-        factored = r.factor.compute(damped);
-      }
-    }
-    step = -r.gradient;
-    if (factored) r.factor.solve_in_place(step);
-    const auto outcome = detail::newton_line_step(f, r, step, trial, options);
-    if (outcome == detail::StepOutcome::kNonFinite) return r;
-    if (outcome == detail::StepOutcome::kStop) break;
-  }
-  // Leave `factor` as the Cholesky of the exact Hessian at the final point.
-  if (!r.factor.compute(r.hessian) && r.status == MinimizeStatus::kConverged)
-    r.status = MinimizeStatus::kNotPositiveDefinite;
+  auto k = newton_minimize<BandedFactor<B>>(f, x0, NewtonOptions(options));
+  r.status = detail::minimum_status(k);
+  r.x = std::move(k.x);
+  r.value = k.value;
+  r.gradient = std::move(k.gradient);
+  r.hessian = std::move(k.hessian);
+  // The kernel's factor may be of a damped Hessian; the result promises the exact one's.
+  if (k.exact_factor)
+    r.factor = std::move(k.factor);
+  else
+    r.factor.compute(r.hessian);
+  r.iterations = k.iterations;
+  r.evaluations = k.evaluations;
   return r;
 }
 
