@@ -19,6 +19,7 @@
 
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <utility>
 
 #include "implicit/core/error.hpp"
@@ -111,6 +112,12 @@ StepOutcome newton_line_step(const F& f, Result& r, V& step, V& trial,
 }  // namespace detail
 
 namespace detail {
+/// The factor of minimize(): Eigen's LLT, but the written-out 3x3 Cholesky for N = 3 (poses): it
+/// does not take the logs of log det L at every iteration, which cost as much as the rest of a
+/// 3-D Newton step.
+template <int N>
+using MinimizeFactor = std::conditional_t<N == 3, SmallFactor<3>, DenseFactor<N>>;
+
 /// The status of minimize() and minimize_banded() from the kernel's: a point where the exact
 /// Hessian is not SPD is not a minimum, even when a damped matrix factored there (the kernel's
 /// kNotPositiveDefinite means that nothing factored at all).
@@ -131,7 +138,7 @@ MinimizeResult<T::Dim> minimize(const T& f, const typename T::Vector& x0,
   const int n = f.dim();
   // A start point of the wrong size is bad input (evaluating F there would read out of bounds).
   require(x0.size() == n, "minimize: expected a start point of dimension {}, got {}", n, x0.size());
-  auto k = newton_minimize<DenseFactor<N>>(f, x0, NewtonOptions(options));
+  auto k = newton_minimize<detail::MinimizeFactor<N>>(f, x0, NewtonOptions(options));
   MinimizeResult<N> r;
   r.status = detail::minimum_status(k);
   r.x = std::move(k.x);
