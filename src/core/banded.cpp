@@ -1,6 +1,6 @@
 // Explicit instantiations of the block-tridiagonal types for the block sizes used by the
 // library (scalar paths and planar paths), so that users of these sizes do not recompile them.
-#include "implicit/core/banded.hpp"
+#include "implicit/core/block_tridiagonal.hpp"
 
 namespace implicit {
 template struct BlockTridiagonal<1>;

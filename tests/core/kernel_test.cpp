@@ -1,5 +1,6 @@
 // The implicit-sampling kernel: factor models, the one Newton loop (with Gauss-Newton fallback
-// and equality constraints), the generic linear and random maps and the one log-weight formula.
+// and equality constraints), the generic linear and random maps and the one log-weight formula;
+// and core's dense entry points (minimize, linear_map_sample, random_map_sample) as the kernel.
 // Oracles are closed forms (quadratics, Gaussians) and the dense Eigen factorisation.
 
 #include <cmath>
@@ -11,8 +12,12 @@
 #include "implicit/core/banded.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/implicit_maps.hpp"
+#include "implicit/core/linear_map.hpp"
 #include "implicit/core/log_weight.hpp"
+#include "implicit/core/minimize.hpp"
 #include "implicit/core/newton.hpp"
+#include "implicit/core/random_map.hpp"
+#include "implicit/core/target.hpp"
 
 namespace {
 using namespace implicit;
@@ -281,6 +286,64 @@ TEST(RandomMapRay, AJumpOverTheLevelIsReportedNotARoot) {
   // The solver stops at a relative bracket width of 1e-12 with hi <= 4 here: |error| <= 4e-12.
   EXPECT_NEAR(lambda, 2.0, 4e-12);
   EXPECT_NEAR(slope, 2.0, 4e-12);
+}
+
+// minimize() is the kernel with the dense factor: the same iterates, bit for bit.
+TEST(CoreOnKernel, MinimizeIsNewtonWithTheDenseFactor) {
+  const auto f = make_autodiff_target<2>([](const auto& x) {
+    const auto b = x(1) - x(0) * x(0);
+    return (1.0 - x(0)) * (1.0 - x(0)) + 100.0 * (b * b);
+  });
+  const Vec<2> x0(-1.2, 1.0);
+  const auto r = minimize(f, x0);
+  const auto k = newton_minimize<DenseFactor<2>>(f, x0, NewtonOptions(MinimizeOptions{}));
+  ASSERT_EQ(r.status, MinimizeStatus::kConverged);
+  EXPECT_EQ(r.status, k.status);
+  EXPECT_EQ(r.x, k.x);
+  EXPECT_EQ(r.value, k.value);
+  EXPECT_EQ(r.iterations, k.iterations);
+  EXPECT_EQ(r.evaluations, k.evaluations);
+}
+
+// The dense samplers are the kernel's maps with the Laplace approximation's L: the same samples
+// and weights as with the dense factor of the same Hessian.
+TEST(CoreOnKernel, DenseSamplersAreTheKernelMaps) {
+  const auto f = make_autodiff_target<2>([](const auto& x) {
+    return 0.5 * (x(0) * x(0)) + 0.25 * (x(0) * x(0)) * (x(0) * x(0)) + x(1) * x(1);
+  });
+  const auto r = minimize(f, Vec<2>(0.5, -0.3));
+  const auto lp = Laplace<2>::from(r);
+  DenseFactor<2> dense;
+  ASSERT_TRUE(dense.compute(r.hessian));
+  for (const Vec<2>& xi : {Vec<2>(0.3, -1.2), Vec<2>(-2.5, 0.7)}) {
+    Vec<2> x1, x2;
+    EXPECT_NEAR(linear_map_sample(f, lp, xi, x1), linear_map(f, lp.mu, dense, xi, x2), 1e-12);
+    EXPECT_LT((x1 - x2).cwiseAbs().maxCoeff(), 1e-12);
+    double w1 = 0.0, w2 = 0.0;
+    ASSERT_EQ(random_map_sample(f, lp, xi, x1, w1), RandomMapStatus::kOk);
+    ASSERT_EQ(random_map(f, lp.mu, lp.phi, dense, xi, x2, w2), RayStatus::kOk);
+    EXPECT_NEAR(w1, w2, 1e-12);
+    EXPECT_LT((x1 - x2).cwiseAbs().maxCoeff(), 1e-12);
+  }
+}
+
+// F = |x|^2 / 2 inside the unit disc and +inf outside: for |xi| > 1 the level phi + |xi|^2 / 2
+// lies beyond the jump, so no point of the ray maps there and the weight is exactly 0.
+TEST(CoreOnKernel, RandomMapSampleReportsAJumpWithWeightZero) {
+  const auto f = make_analytic_target<2>([](const Vec<2>& x, Vec<2>* g, Mat<2>* h) {
+    if (g) *g = x;
+    if (h) h->setIdentity();
+    return x.squaredNorm() < 1.0 ? 0.5 * x.squaredNorm() : std::numeric_limits<double>::infinity();
+  });
+  const auto lp = Laplace<2>::make(Vec<2>::Zero(), 0.0, Mat<2>::Identity());
+  Vec<2> x;
+  double lw = 0.0;
+  EXPECT_EQ(random_map_sample(f, lp, Vec<2>(1.5, 0.5), x, lw), RandomMapStatus::kJump);
+  EXPECT_EQ(lw, -std::numeric_limits<double>::infinity());
+  // Inside the disc the map is the identity and the weight that of the Gaussian, 2 pi.
+  ASSERT_EQ(random_map_sample(f, lp, Vec<2>(0.3, 0.4), x, lw), RandomMapStatus::kOk);
+  EXPECT_NEAR(lw, kLog2Pi, 1e-12);
+  EXPECT_LT((x - Vec<2>(0.3, 0.4)).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 }  // namespace

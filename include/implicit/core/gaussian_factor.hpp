@@ -29,7 +29,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
-#include "implicit/core/banded.hpp"
+#include "implicit/core/block_tridiagonal.hpp"
 #include "implicit/core/types.hpp"
 
 namespace implicit {

@@ -19,7 +19,6 @@
 
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/log_weight.hpp"
-#include "implicit/core/random_map.hpp"
 
 namespace implicit {
 
@@ -46,6 +45,13 @@ inline std::string_view to_string(RayStatus s) {
   }
   return "unknown";
 }
+
+/// The root finder's tolerances and limits.
+struct RandomMapOptions {
+  double relative_tolerance = 1e-12;
+  int max_iterations = 200;
+  int max_doublings = 200;
+};
 
 /// X = mu + L^{-T} xi written to `x`; returns log w (implicit_log_weight).
 template <GaussianFactor Factor, typename F, typename XiDerived>

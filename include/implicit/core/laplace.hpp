@@ -9,9 +9,8 @@
 #include <cmath>
 #include <optional>
 
-#include <Eigen/Cholesky>
-
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/minimize.hpp"
 #include "implicit/core/types.hpp"
 
@@ -28,16 +27,18 @@ struct Laplace {
 
   /// Builds from a centre, value and SPD Hessian; std::nullopt if H is not positive definite.
   static std::optional<Laplace> try_make(const Vec<N>& mu, double phi, const Mat<N>& hessian) {
-    Eigen::LLT<Mat<N>> llt(hessian);
-    if (llt.info() != Eigen::Success || !hessian.allFinite()) return std::nullopt;
+    DenseFactor<N> llt;
+    if (!llt.compute(hessian)) return std::nullopt;  // not SPD, not finite, or det H = 0
     Laplace lp;
     lp.mu = mu;
     lp.phi = phi;
     lp.L = llt.matrixL();
-    lp.log_det_L = lp.L.diagonal().array().log().sum();
-    if (!std::isfinite(lp.log_det_L)) return std::nullopt;
+    lp.log_det_L = llt.log_det_L();
     return lp;
   }
+
+  /// L as the kernel's factor (implicit_maps.hpp); refers to this approximation's L.
+  LowerFactorView<N> factor() const { return LowerFactorView<N>(L, log_det_L); }
 
   /// As try_make, but throws InvalidArgument naming the problem.
   static Laplace make(const Vec<N>& mu, double phi, const Mat<N>& hessian) {

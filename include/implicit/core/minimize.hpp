@@ -1,62 +1,35 @@
 #pragma once
-// Minimising F: damped Newton with Armijo backtracking and Levenberg damping.
+// Minimising a dense target F: the Newton kernel (newton.hpp) with the dense factor.
 //
-// Implicit sampling starts at mu = argmin F. This minimiser is written for small dense problems
-// evaluated once per particle (fixed-size Eigen types, no allocation when N is fixed), so it
-// never throws on an algorithm outcome: that is a MinimizeStatus in the result (only a start
-// point of the wrong dimension, a programming error, throws InvalidArgument). For long paths with
-// block-tridiagonal Hessians see implicit/core/banded.hpp.
+// Implicit sampling starts at mu = argmin F. minimize() is newton_minimize<DenseFactor<N>>
+// (damped Newton, Armijo backtracking, Levenberg damping of indefinite Hessians) with the
+// gradient and relative-step stopping rules of MinimizeOptions, and its result in the Target's
+// types (fixed-size Eigen, no allocation when N is fixed). It never throws on an algorithm
+// outcome: that is a MinimizeStatus in the result (only a start point of the wrong dimension, a
+// programming error, throws InvalidArgument). For long paths with block-tridiagonal Hessians see
+// implicit/core/banded.hpp.
 //
 //   auto r = implicit::minimize(target, x0);
 //   if (r.status != implicit::MinimizeStatus::kConverged) { ... }
 //
-// Indefinite Hessians: the Newton system uses H + lambda I with the smallest lambda (grown by
-// factors of 10 from 1e-8 * max|H_ii|) for which the Cholesky factorisation succeeds. Non-finite
-// F along a line search (outside the support, NaN) counts as a failed step and the step is halved.
+// kNotPositiveDefinite: the iteration stopped (gradient or step below tolerance) at a point where
+// the exact Hessian is not positive definite (a saddle or a flat direction), so it is not a
+// Laplace centre. Non-finite F along a line search (outside the support, NaN) counts as a failed
+// step and the step is halved.
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
-#include <string_view>
+#include <type_traits>
+#include <utility>
 
-#include <Eigen/Cholesky>
-
+#include "implicit/core/error.hpp"
+#include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/minimize_options.hpp"
+#include "implicit/core/newton.hpp"
 #include "implicit/core/target.hpp"
 #include "implicit/core/types.hpp"
 
 namespace implicit {
-
-enum class MinimizeStatus {
-  kConverged,            ///< gradient or step below tolerance, Hessian SPD at the end
-  kMaxIterations,        ///< iteration limit reached
-  kNonFinite,            ///< F, gradient or Hessian not finite at the start point or a step
-  kNotPositiveDefinite,  ///< converged, but the Hessian at the end is not positive definite
-  kLineSearchFailed,     ///< no step decreased F (F non-smooth, or wrong derivatives)
-};
-
-inline std::string_view to_string(MinimizeStatus s) {
-  switch (s) {
-    case MinimizeStatus::kConverged:
-      return "converged";
-    case MinimizeStatus::kMaxIterations:
-      return "max_iterations";
-    case MinimizeStatus::kNonFinite:
-      return "non_finite";
-    case MinimizeStatus::kNotPositiveDefinite:
-      return "not_positive_definite";
-    case MinimizeStatus::kLineSearchFailed:
-      return "line_search_failed";
-  }
-  return "unknown";
-}
-
-struct MinimizeOptions {
-  int max_iterations = 100;
-  double gradient_tolerance = 1e-10;  ///< stop when max|grad F| <= this
-  double step_tolerance = 1e-12;      ///< stop when max|step| <= this * (1 + max|x|)
-  double armijo = 1e-4;               ///< sufficient-decrease constant
-  int max_backtracks = 60;
-};
 
 template <int N>
 struct MinimizeResult {
@@ -71,17 +44,12 @@ struct MinimizeResult {
 };
 
 namespace detail {
-inline bool all_finite(double v) { return std::isfinite(v); }
-template <typename Derived>
-inline bool all_finite(const Eigen::MatrixBase<Derived>& m) {
-  return m.allFinite();
-}
-}  // namespace detail
+// The line step of the Newton loop that control's constrained path solver
+// (control/path_solvers.hpp) still carries; minimize() and minimize_banded() run on
+// newton_minimize. Goes when that solver does too.
 
-namespace detail {
 /// Armijo backtracking from x along `step` (halving t): writes the accepted point to `trial` and
 /// returns the accepted t, or 0 if no step decreased F. Non-finite trial values count as failures.
-/// Shared by the dense and the banded Newton loops.
 template <typename F, typename V>
 double armijo_backtrack(const F& f, const V& x, const V& step, double value, double slope,
                         const MinimizeOptions& options, V& trial, int& evaluations) {
@@ -106,10 +74,9 @@ bool hessian_finite(const H& h) {
 
 enum class StepOutcome { kContinue, kStop, kNonFinite };
 
-/// The part of a Newton iteration after the direction is known, shared by the dense and banded
-/// loops so that both apply the same safeguards: steepest descent when `step` is not a descent
-/// direction, Armijo backtracking, the move, and the convergence tests. Sets r.status when the
-/// loop must end.
+/// The part of a Newton iteration after the direction is known: steepest descent when `step` is
+/// not a descent direction, Armijo backtracking, the move, and the convergence tests. Sets
+/// r.status when the loop must end.
 template <typename F, typename Result, typename V>
 StepOutcome newton_line_step(const F& f, Result& r, V& step, V& trial,
                              const MinimizeOptions& options) {
@@ -144,61 +111,42 @@ StepOutcome newton_line_step(const F& f, Result& r, V& step, V& trial,
 }
 }  // namespace detail
 
-/// Minimises `f` from x0 by damped Newton. Never throws on algorithm failure; see `status`.
+namespace detail {
+/// The factor of minimize(): Eigen's LLT, but the written-out 3x3 Cholesky for N = 3 (poses): it
+/// does not take the logs of log det L at every iteration, which cost as much as the rest of a
+/// 3-D Newton step.
+template <int N>
+using MinimizeFactor = std::conditional_t<N == 3, SmallFactor<3>, DenseFactor<N>>;
+
+/// The status of minimize() and minimize_banded() from the kernel's: a point where the exact
+/// Hessian is not SPD is not a minimum, even when a damped matrix factored there (the kernel's
+/// kNotPositiveDefinite means that nothing factored at all).
+template <typename Minimum>
+MinimizeStatus minimum_status(const Minimum& k) {
+  if (k.status == MinimizeStatus::kConverged && !k.exact_factor)
+    return MinimizeStatus::kNotPositiveDefinite;
+  return k.status;
+}
+}  // namespace detail
+
+/// Minimises `f` from x0: newton_minimize with the dense factor and the stopping rules of
+/// `options` (gradient, relative step). Never throws on algorithm failure; see `status`.
 template <Target T>
 MinimizeResult<T::Dim> minimize(const T& f, const typename T::Vector& x0,
                                 const MinimizeOptions& options = {}) {
   constexpr int N = T::Dim;
-  using V = Vec<N>;
-  using M = Mat<N>;
   const int n = f.dim();
   // A start point of the wrong size is bad input (evaluating F there would read out of bounds).
   require(x0.size() == n, "minimize: expected a start point of dimension {}, got {}", n, x0.size());
+  auto k = newton_minimize<detail::MinimizeFactor<N>>(f, x0, NewtonOptions(options));
   MinimizeResult<N> r;
-  r.x = x0;
-  r.gradient.resize(n);
-  r.hessian.resize(n, n);
-  r.value = f.evaluate(r.x, &r.gradient, &r.hessian);
-  r.evaluations = 1;
-  if (!detail::all_finite(r.value) || !r.gradient.allFinite() || !r.hessian.allFinite()) {
-    r.status = MinimizeStatus::kNonFinite;
-    return r;
-  }
-  Eigen::LLT<M> llt(n);
-  M damped = M::Zero(n, n);
-  V step = V::Zero(n);
-  V trial = V::Zero(n);
-  r.status = MinimizeStatus::kMaxIterations;
-  for (r.iterations = 0; r.iterations < options.max_iterations; ++r.iterations) {
-    if (r.gradient.cwiseAbs().maxCoeff() <= options.gradient_tolerance) {
-      r.status = MinimizeStatus::kConverged;
-      break;
-    }
-    // Newton direction, Levenberg-damped until the factorisation succeeds.
-    llt.compute(r.hessian);
-    if (llt.info() != Eigen::Success) {
-      const double scale = std::max(1.0, r.hessian.diagonal().cwiseAbs().maxCoeff());
-      double lambda = 1e-8 * scale;
-      for (int k = 0; k < 40; ++k, lambda *= 10.0) {
-        damped = r.hessian;
-        damped.diagonal().array() += lambda;
-        llt.compute(damped);
-        if (llt.info() == Eigen::Success) break;
-      }
-    }
-    if (llt.info() == Eigen::Success) {
-      step = -llt.solve(r.gradient);
-    } else {
-      step = -r.gradient;
-    }
-    const auto outcome = detail::newton_line_step(f, r, step, trial, options);
-    if (outcome == detail::StepOutcome::kNonFinite) return r;
-    if (outcome == detail::StepOutcome::kStop) break;
-  }
-  if (r.status == MinimizeStatus::kConverged) {
-    llt.compute(r.hessian);
-    if (llt.info() != Eigen::Success) r.status = MinimizeStatus::kNotPositiveDefinite;
-  }
+  r.status = detail::minimum_status(k);
+  r.x = std::move(k.x);
+  r.value = k.value;
+  r.gradient = std::move(k.gradient);
+  r.hessian = std::move(k.hessian);
+  r.iterations = k.iterations;
+  r.evaluations = k.evaluations;
   return r;
 }
 

@@ -38,7 +38,7 @@
 #include <Eigen/Cholesky>
 
 #include "implicit/core/gaussian_factor.hpp"
-#include "implicit/core/minimize.hpp"
+#include "implicit/core/minimize_options.hpp"
 #include "implicit/core/types.hpp"
 
 namespace implicit {
