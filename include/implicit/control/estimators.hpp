@@ -111,12 +111,13 @@ PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
       lw[static_cast<std::size_t>(j)] = linear_map(F, r.x, r.factor, xi, y) - log_norm;
     }
   } else {
-    Eigen::VectorXd d(N);
     for (int j = 0; j < M; ++j) {
       rng.fill_normal(xi);
       const double rho = xi.squaredNorm();
-      // Into d's storage (same size; a resizing assignment trips GCC 12's -Wuse-after-free).
-      d.array() = xi.array() / std::sqrt(rho);
+      // The ray direction d = L^{-T} xi / |xi|, in xi's storage (xi is not needed after rho; an
+      // assignment to a second vector trips GCC 12's -Wuse-after-free inside Eigen).
+      Eigen::VectorXd& d = xi;
+      d /= std::sqrt(rho);
       r.factor.upper_solve_in_place(d);
       const double level = r.value + 0.5 * rho;
       double lambda = 0.0, slope = 0.0;

@@ -43,7 +43,6 @@ struct MinimizeResult {
   bool converged() const { return status == MinimizeStatus::kConverged; }
 };
 
-
 namespace detail {
 /// The factor of minimize(): Eigen's LLT, but the written-out 3x3 Cholesky for N = 3 (poses): it
 /// does not take the logs of log det L at every iteration, which cost as much as the rest of a
