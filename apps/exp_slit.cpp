@@ -17,6 +17,7 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
 #include "parallel_runs.hpp"
+#include "slit_table.hpp"
 
 namespace implicit::app {
 
@@ -84,12 +85,12 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
   const double x0 = slit.parameters().initial_state;
 
   // Table 2.
-  control::SlitTableOptions opt;
+  SlitTableOptions opt;
   opt.samples = s.samples;
   opt.runs = s.runs;
   opt.estimator = estimator;
   opt.seed = ctx.seed;
-  control::SlitTable table;
+  SlitTable table;
   {
     Progress progress(fmt::format("slit {} M={}", s.mode, s.samples),
                       static_cast<std::size_t>(s.runs), ctx.show_progress());
@@ -98,7 +99,7 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
                         fmt::format("seed={} M={} mode={} sampling={}", ctx.seed, s.samples, s.mode,
                                     static_cast<int>(opt.sampling)),
                         static_cast<std::size_t>(s.runs), [&](std::size_t r) {
-                          const auto row = control::slit_table_row(slit, opt, r);
+                          const auto row = slit_table_row(slit, opt, r);
                           progress.tick();
                           return RunRecord{row.error_x,
                                            row.error_u,
@@ -107,13 +108,13 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
                                            static_cast<double>(row.fallbacks),
                                            row.ess_mean};
                         });
-    std::vector<control::SlitTableRow> rows(records.size());
+    std::vector<SlitTableRow> rows(records.size());
     for (std::size_t r = 0; r < rows.size(); ++r) {
       const auto& v = records[r];
       rows[r] = {v.at(0), v.at(1), v.at(2) != 0.0, v.at(3) != 0.0, static_cast<int>(v.at(4)),
                  v.at(5)};
     }
-    table = control::summarise_slit_table(std::move(rows));
+    table = summarise_slit_table(std::move(rows));
     progress.finish();
   }
 

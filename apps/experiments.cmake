@@ -1,9 +1,11 @@
 # The experiment code that both the tool and the Python module run (implicit.mcl.run and friends
-# give the numbers of `implicit mcl --json`). Compiled once, position-independent so the module can
-# link it too; -fno-semantic-interposition keeps the inlining an executable would get.
+# give the numbers of `implicit mcl --json`), with the paper's table aggregation (slit_table.cpp,
+# Table 2). Compiled once, position-independent so the module can link it too;
+# -fno-semantic-interposition keeps the inlining an executable would get. The apps tests and
+# bench_control link it as well; a target that links it also needs a transport (apps/transport/).
 set(IMPLICIT_EXPERIMENT_SOURCES
-    exp_mcl.cpp exp_mcl_global.cpp exp_slam.cpp exp_slit.cpp exp_arm.cpp exp_himmelblau.cpp
-    parallel_runs.cpp context.cpp vehicle.cpp)
+    exp_mcl.cpp exp_mcl_global.cpp exp_slam.cpp exp_slit.cpp slit_table.cpp exp_arm.cpp
+    exp_himmelblau.cpp parallel_runs.cpp context.cpp vehicle.cpp)
 list(TRANSFORM IMPLICIT_EXPERIMENT_SOURCES PREPEND ${PROJECT_SOURCE_DIR}/apps/)
 find_package(CLI11 REQUIRED)
 find_package(nlohmann_json REQUIRED)

@@ -1,7 +1,8 @@
 // Timing of path integral control: one control evaluation for the double slit (M = 50), the
 // robot arm (n = 200) and Himmelblau (M = 50), and the whole of Table 2 (4 x 500 closed-loop
-// runs, parallel over runs); the generic estimator with the random map and with a hard wall
-// (mixture over the openings). Figures are recorded in docs/performance.md.
+// runs, parallel over runs, through the experiment's aggregation in apps/slit_table.hpp); the
+// generic estimator with the random map and with a hard wall (mixture over the openings). Figures
+// are recorded in docs/performance.md.
 #include <benchmark/benchmark.h>
 
 #include <vector>
@@ -10,6 +11,7 @@
 #include "implicit/control/himmelblau.hpp"
 #include "implicit/control/path_integral.hpp"
 #include "implicit/control/robot_arm.hpp"
+#include "slit_table.hpp"
 
 using namespace implicit::control;
 
@@ -126,11 +128,11 @@ void BM_SlitTable2(benchmark::State& state, SlitEstimator estimator) {
   const DoubleSlit slit;
   for (auto _ : state) {
     for (int M : {10, 50, 100, 500}) {
-      SlitTableOptions o;
+      implicit::app::SlitTableOptions o;
       o.samples = M;
       o.runs = 500;
       o.estimator = estimator;
-      benchmark::DoNotOptimize(run_slit_table(slit, o).error_u_mean);
+      benchmark::DoNotOptimize(implicit::app::run_slit_table(slit, o).error_u_mean);
     }
   }
 }

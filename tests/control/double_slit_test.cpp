@@ -8,7 +8,6 @@
 #include "implicit/control/double_slit.hpp"
 #include "implicit/control/normal_tail.hpp"
 #include "implicit/core/error.hpp"
-#include "implicit/core/parallel.hpp"
 #include "implicit/core/weights.hpp"
 
 using implicit::StreamKey;
@@ -362,29 +361,6 @@ TEST(DoubleSlitPlainMonteCarlo, NoPathPasses) {
   // 20000 paths the SE of log psi_hat is 0.0066; tolerance 4.5 SE = 0.03.
   const auto after = slit.plain_monte_carlo(0.5, 90, 20000, 2);
   EXPECT_NEAR(after.log_psi, slit.exact_log_psi(0.5, slit.time(90)), 0.03);
-}
-
-TEST(DoubleSlitClosedLoop, ThreadCountIndependent) {
-  DoubleSlit slit;
-  SlitTableOptions o;
-  o.samples = 20;
-  o.runs = 24;
-  o.estimator = SlitEstimator::kFrozenWall;
-  o.seed = 4;
-  SlitTable a, b;
-  {
-    implicit::ThreadLimit limit(1);
-    a = run_slit_table(slit, o);
-  }
-  {
-    implicit::ThreadLimit limit(2);
-    b = run_slit_table(slit, o);
-  }
-  ASSERT_EQ(a.runs.size(), b.runs.size());
-  for (std::size_t r = 0; r < a.runs.size(); ++r) {
-    EXPECT_EQ(a.runs[r].error_u, b.runs[r].error_u);
-    EXPECT_EQ(a.runs[r].error_x, b.runs[r].error_x);
-  }
 }
 
 TEST(DoubleSlitClosedLoop, CommonNoiseAndZeroErrorForExactControl) {

@@ -20,7 +20,6 @@
 
 #include <array>
 #include <cstdint>
-#include <functional>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -211,54 +210,11 @@ struct SlitRun {
 
 /// Runs the closed loop for run number `run`: noise W_k from stream (seed, run, 0,
 /// kProcessNoise) (if `noise` is empty) and reference variables from (seed, run, k, kReference).
+/// The paper's Table 2 is statistics over many such runs: that aggregation is the experiment's,
+/// not the library's (apps/slit_table.hpp).
 SlitRun simulate_slit_run(const DoubleSlit& slit, int samples, SlitEstimator estimator,
                           std::uint64_t seed, std::uint64_t run,
                           SlitSampling sampling = SlitSampling::kWall,
                           const Eigen::VectorXd& noise = {});
-
-/// Table 2 of the paper: many closed-loop runs, in parallel over runs (bit-identical for any
-/// thread count: run r uses only streams keyed by (seed, r, ...)).
-struct SlitTableOptions {
-  int samples = 50;
-  int runs = 500;
-  SlitEstimator estimator = SlitEstimator::kFrozenWall;
-  std::uint64_t seed = 1;
-  SlitSampling sampling = SlitSampling::kWall;
-};
-
-struct SlitTableRow {
-  double error_x = 0.0, error_u = 0.0;  ///< relative errors (fractions, not %)
-  bool crashed_exact = false, crashed_estimate = false;
-  int fallbacks = 0;
-  double ess_mean = 0.0;
-};
-
-struct SlitTable {
-  std::vector<SlitTableRow> runs;
-  double error_x_mean = 0.0, error_x_std = 0.0, error_x_median = 0.0;  ///< fractions
-  double error_u_mean = 0.0, error_u_std = 0.0, error_u_median = 0.0;  ///< fractions
-  /// Runs whose estimated-control trajectory crashed. Paper mode: about 0.45 (0.460 at M = 10,
-  /// 0.447 at M = 50, 0.434 at M = 500, from 20 000 runs; P aims at a slit edge, so the last step
-  /// misses with probability 1/2). A 500-run table has a binomial SE of 0.022; the spec's "0.49"
-  /// is such an estimate (tests/control/slit_table_slow.cpp, PaperModeCrashFraction).
-  double crash_fraction = 0.0;
-  /// Runs whose exact-control trajectory crashed: 0.235 (a discrete-time effect: the
-  /// continuous-time optimal control never crashes).
-  double exact_crash_fraction = 0.0;
-  int fallbacks = 0;  ///< control evaluations where no sample passed
-  double ess_mean = 0.0;
-};
-
-/// Runs options.runs closed-loop runs; `on_run_done` (optional, thread-safe) is called after
-/// each run (for progress bars).
-SlitTable run_slit_table(const DoubleSlit& slit, const SlitTableOptions& options,
-                         const std::function<void()>& on_run_done = {});
-
-/// Run `run` of run_slit_table alone (its row depends on nothing else), and the table from its
-/// rows in run order: run_slit_table is summarise_slit_table of every slit_table_row. For callers
-/// that spread the runs further (apps/parallel_runs.hpp).
-SlitTableRow slit_table_row(const DoubleSlit& slit, const SlitTableOptions& options,
-                            std::uint64_t run);
-SlitTable summarise_slit_table(std::vector<SlitTableRow> rows);
 
 }  // namespace implicit::control

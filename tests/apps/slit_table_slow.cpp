@@ -6,8 +6,10 @@
 #include <cmath>
 
 #include "implicit/control/double_slit.hpp"
+#include "slit_table.hpp"
 
 using namespace implicit::control;
+using namespace implicit::app;
 
 namespace {
 SlitTable table(int M, SlitEstimator e) {

@@ -1,13 +1,18 @@
 // Reduced Table 2 (spec §2.4.6-2.4.7): 100 closed-loop runs instead of 500. The reference
 // numbers are the spec's 500-run means; tolerances are 4.5 standard errors of OUR mean
 // (sd over runs / sqrt(runs)), which also absorbs the reference's own error (its SE is smaller).
+// The table is the experiment's (apps/slit_table.hpp); the same runs give the same rows for 1 and
+// 2 threads.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "implicit/control/double_slit.hpp"
+#include "implicit/core/parallel.hpp"
+#include "slit_table.hpp"
 
 using namespace implicit::control;
+using namespace implicit::app;
 
 namespace {
 SlitTable table(int M, SlitEstimator e, int runs) {
@@ -46,4 +51,27 @@ TEST(SlitTable2Reduced, PaperModeReproducesThePaper) {
   EXPECT_NEAR(t.error_u_mean, 0.0496, 4.5 * se(t.error_u_std, runs));
   EXPECT_NEAR(t.error_u_median, 0.038, 0.005);
   EXPECT_GT(t.crash_fraction, t.exact_crash_fraction + 0.1);
+}
+
+TEST(DoubleSlitClosedLoop, ThreadCountIndependent) {
+  DoubleSlit slit;
+  SlitTableOptions o;
+  o.samples = 20;
+  o.runs = 24;
+  o.estimator = SlitEstimator::kFrozenWall;
+  o.seed = 4;
+  SlitTable a, b;
+  {
+    implicit::ThreadLimit limit(1);
+    a = run_slit_table(slit, o);
+  }
+  {
+    implicit::ThreadLimit limit(2);
+    b = run_slit_table(slit, o);
+  }
+  ASSERT_EQ(a.runs.size(), b.runs.size());
+  for (std::size_t r = 0; r < a.runs.size(); ++r) {
+    EXPECT_EQ(a.runs[r].error_u, b.runs[r].error_u);
+    EXPECT_EQ(a.runs[r].error_x, b.runs[r].error_x);
+  }
 }
