@@ -288,6 +288,125 @@ TEST(RandomMapRay, AJumpOverTheLevelIsReportedNotARoot) {
   EXPECT_NEAR(slope, 2.0, 4e-12);
 }
 
+// F is +inf on every lambda > 0 while g(0) = -rho / 2 < 0: F jumps over the level at 0+. The
+// bracket [0, hi] can only shrink onto 0, where no relative tolerance is met; the solver stops
+// when hi <= 1e-12 sqrt(rho) (about 40 halvings) and reports the jump, not a failure.
+TEST(RandomMapRay, InfiniteOnTheWholeRayIsAJumpAtZero) {
+  int calls = 0;
+  auto wall = [&](double, double* s) {
+    ++calls;
+    if (s) *s = 0.0;
+    return std::numeric_limits<double>::infinity();
+  };
+  double lambda = 0.0, slope = 0.0;
+  EXPECT_EQ(solve_random_map_ray(wall, 4.0, 2.0, lambda, slope), RayStatus::kJump);
+  EXPECT_LE(calls, 45);
+  // A finite jump over the level at 0+ is not a wall: still not converged, after every iteration.
+  calls = 0;
+  auto step = [&](double l, double* s) {
+    ++calls;
+    if (s) *s = l;
+    return 1.0 + 0.5 * l * l;
+  };
+  EXPECT_EQ(solve_random_map_ray(step, 4.0, 2.0, lambda, slope), RayStatus::kNotConverged);
+  EXPECT_EQ(calls, 202);
+}
+
+// Rays with a root keep their iterates: the roots and evaluation counts recorded from the solver
+// before the jump at 0 was recognised (x86-64, bit for bit; 4 ulps allow for contracted
+// multiply-adds elsewhere). `steep` is approached by Newton from above (lo stays 0 until the
+// last step), `flat` needs doublings of the bracket.
+TEST(RandomMapRay, RaysWithARootKeepTheirIterates) {
+  struct Case {
+    double (*g)(double, double*);
+    double root;
+    int calls;
+  };
+  const Case cases[] = {
+      {[](double l, double* s) {
+         if (s) *s = 4.0 * std::exp(4.0 * l);
+         return std::exp(4.0 * l) - 3.0;
+       },
+       0x1.193ea7aad030bp-2, 11},
+      {[](double l, double* s) {
+         if (s) *s = l + l * l * l;
+         return 0.5 * l * l + 0.25 * l * l * l * l - 2.0;
+       },
+       0x1.6a09e667f3bcdp+0, 8},
+      {[](double l, double* s) {
+         if (s) *s = 0.02 * l;
+         return 0.01 * l * l - 2.0;
+       },
+       0x1.c48c6001f299ep+3, 21},
+  };
+  for (const Case& c : cases) {
+    int calls = 0;
+    auto g = [&](double l, double* s) {
+      ++calls;
+      return c.g(l, s);
+    };
+    double lambda = 0.0, slope = 0.0;
+    ASSERT_EQ(solve_random_map_ray(g, 4.0, 2.0, lambda, slope), RayStatus::kOk);
+    EXPECT_DOUBLE_EQ(lambda, c.root);
+    EXPECT_EQ(calls, c.calls);
+  }
+}
+
+// F = 1/2 x^T H x + 2 on the half-space n^T x <= 0 and `outside` (+inf, or NaN for "no value")
+// beyond: finite at the mode 0, which lies on the edge of the support. The mode is 0 so that
+// x = lambda d leaves the half-space for every lambda > 0 however small (x = mu + lambda d with
+// mu != 0 rounds back onto mu for tiny lambda, which lands F on its finite side).
+template <int M>
+struct HalfSpaceQuadratic {
+  Mat<M> h;
+  Vec<M> n;
+  double outside;
+  double evaluate(const Vec<M>& x, Vec<M>* g, Mat<M>* hess) const {
+    if (g) *g = h * x;
+    if (hess) *hess = h;
+    return n.dot(x) <= 0.0 ? 0.5 * x.dot(h * x) + 2.0 : outside;
+  }
+};
+
+// Of the rays xi and -xi from the mode, the one leaving the half-space sees F = +inf (or NaN) for
+// every lambda > 0: kJump with weight 0. The other stays inside, where F is the Gaussian and the
+// weight is Z = (2 pi)^{m/2} det(H)^{-1/2} e^{-2} exactly.
+template <int M>
+void expect_half_space_rays(const HalfSpaceQuadratic<M>& f, const Vec<M>& xi) {
+  DenseFactor<M> factor;
+  ASSERT_TRUE(factor.compute(f.h));
+  const double log_z = 0.5 * M * kLog2Pi - 0.5 * std::log(f.h.determinant()) - 2.0;
+  for (const Vec<M>& x0 : {Vec<M>(xi), Vec<M>(-xi)}) {
+    Vec<M> d = x0;
+    factor.upper_solve_in_place(d);  // the ray's direction (up to |xi|)
+    ASSERT_NE(f.n.dot(d), 0.0);
+    Vec<M> x;
+    double lw = 0.0;
+    const RayStatus status = random_map(f, Vec<M>::Zero().eval(), 2.0, factor, x0, x, lw);
+    if (f.n.dot(d) > 0.0) {
+      EXPECT_EQ(status, RayStatus::kJump);
+      EXPECT_EQ(lw, -std::numeric_limits<double>::infinity());
+    } else {
+      ASSERT_EQ(status, RayStatus::kOk);
+      EXPECT_NEAR(lw, log_z, 1e-10);
+      EXPECT_LT((x - d).cwiseAbs().maxCoeff(), 1e-10);  // the linear map's point
+    }
+  }
+}
+
+TEST(CoreOnKernel, RandomMapLeavingTheSupportAtTheModeIsAJump) {
+  for (const double outside :
+       {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+    // 1-D: F = x^2 + 2 on x <= 0.
+    const HalfSpaceQuadratic<1> f1{Mat<1>::Constant(2.0), Vec<1>::Constant(1.0), outside};
+    expect_half_space_rays(f1, Vec<1>(Vec<1>::Constant(0.8)));
+    // 5-D: a Gaussian on a half-space through its mode.
+    const HalfSpaceQuadratic<5> f5{spd5(), (Vec<5>() << 1, -1, 0.5, 0, 2).finished(), outside};
+    expect_half_space_rays(f5, (Vec<5>() << 0.3, -1.2, 0.7, 2.0, -0.4).finished());
+    expect_half_space_rays(f5, (Vec<5>() << -2.5, 0.1, 0.0, 0.3, 1.1).finished());
+  }
+}
+
 // minimize() is the kernel with the dense factor: the same iterates, bit for bit.
 TEST(CoreOnKernel, MinimizeIsNewtonWithTheDenseFactor) {
   const auto f = make_autodiff_target<2>([](const auto& x) {

@@ -70,11 +70,18 @@ double linear_map(const F& f, const typename Factor::Vector& mu, const Factor& f
 /// hi doubled from sqrt(rho) until g(hi) > 0, then Newton steps safeguarded by bisection. On
 /// return `lambda` is the root and `slope` = g'(lambda). kJump: F jumps over the level (to +inf)
 /// instead of crossing it; no point of the ray maps there, so the sample's weight is exactly 0.
+/// That includes a jump at lambda = 0+ (mu on the edge of the support, the ray leaving it): if
+/// every g seen is +inf and the bracket [0, hi] has shrunk to hi <= relative_tolerance *
+/// sqrt(rho), the ray is taken to jump at 0 (a relative tolerance cannot be met on a bracket
+/// whose lower end is 0; a root below that hi would need F to climb rho / 2 within a tolerance's
+/// fraction of the quadratic model's root sqrt(rho)).
 template <typename G>
 RayStatus solve_random_map_ray(const G& g_of, double rho, double level, double& lambda,
                                double& slope, const RandomMapOptions& options = {}) {
   double lo = 0.0, hi = std::sqrt(rho);
+  const double jump_at_zero = options.relative_tolerance * hi;
   double ghi = g_of(hi, nullptr);
+  bool only_infinite = std::isinf(ghi);  // no finite g yet (a doubling moves lo off 0 anyway)
   int doublings = 0;
   while (!(ghi > 0.0)) {  // an infinite or NaN F also ends the bracket
     if (++doublings > options.max_doublings) return RayStatus::kBracketFailed;
@@ -92,6 +99,8 @@ RayStatus solve_random_map_ray(const G& g_of, double rho, double level, double& 
       hi = lambda;
     else
       lo = lambda;
+    only_infinite = only_infinite && std::isinf(g);
+    if (only_infinite && lo == 0.0 && hi <= jump_at_zero) return RayStatus::kJump;
     double next = std::isfinite(g) && slope > 0.0 ? lambda - g / slope : 0.5 * (lo + hi);
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
     const double change = std::abs(next - lambda);
