@@ -273,14 +273,10 @@ RayStatus random_map_in_mode(const PathF& F, const WallsAhead<Problem>& w,
     const auto s = static_cast<std::size_t>(i);
     a_mu[s] = a.dot(md.minimizer.template segment<D>(w.block_of(i) * D));
     a_d[s] = a.dot(d.template segment<D>(w.block_of(i) * D));
-    // mu_c sits on the edge of an opening when that wall is clamped: a ray leaving through the
-    // edge never enters the region, F is +inf on all of it, so the sample has no root and
-    // weight 0 (F jumps over the level at lambda = 0; a root finder's bracket cannot shrink
-    // onto 0 to a relative tolerance, so this is decided here, in closed form).
-    const auto& op = w.opening(i, md);
-    if ((a_mu[s] >= op.upper && a_d[s] >= 0.0) || (a_mu[s] <= op.lower && a_d[s] <= 0.0))
-      return RayStatus::kJump;
   }
+  // mu_c sits on the edge of an opening when that wall is clamped: a ray leaving through the
+  // edge sees F = +inf for every lambda > 0, which the root finder reports as a jump at 0
+  // (weight 0), like any other jump over the level.
   auto inside = [&](double lambda) {
     for (int i = 0; i < A; ++i)
       if (!w.opening(i, md).contains(a_mu[static_cast<std::size_t>(i)] +
