@@ -39,7 +39,7 @@ std::string_view to_string(SlitEstimator e) {
   return "unknown";
 }
 
-DoubleSlit::DoubleSlit(const DoubleSlitParameters& p) : p_(p) {
+void check_double_slit_parameters(const DoubleSlitParameters& p) {
   require(std::isfinite(p.dt) && p.dt > 0.0, "double slit: expected dt > 0, got {}", p.dt);
   require(std::isfinite(p.sigma) && p.sigma > 0.0, "double slit: expected sigma > 0, got {}",
           p.sigma);
@@ -58,6 +58,13 @@ DoubleSlit::DoubleSlit(const DoubleSlitParameters& p) : p_(p) {
           p.slits[0].lower, p.slits[0].upper, p.slits[1].lower, p.slits[1].upper);
   require(std::isfinite(p.initial_state), "double slit: expected a finite x(0), got {}",
           p.initial_state);
+  // tf and t1 must be grid times (with 0 < t1 < tf above, t1 is then before tf on the grid).
+  static_cast<void>(grid_count(p.final_time, p.dt, "tf"));
+  static_cast<void>(grid_count(p.wall_time, p.dt, "t1"));
+}
+
+DoubleSlit::DoubleSlit(const DoubleSlitParameters& p) : p_(p) {
+  check_double_slit_parameters(p);
   gamma_ = p.gamma();
   num_steps_ = grid_count(p.final_time, p.dt, "tf");
   wall_step_ = grid_count(p.wall_time, p.dt, "t1");

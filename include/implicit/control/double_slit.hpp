@@ -51,6 +51,11 @@ struct DoubleSlitParameters {
   double gamma() const { return control_cost * sigma; }
 };
 
+/// Throws InvalidArgument naming the first bad parameter: dt, sigma or r not positive, not
+/// 0 < t1 < tf, tf or t1 not a multiple of dt, a slit with lower >= upper, slits overlapping or
+/// out of order, a non-finite x(0). DoubleSlit and double_slit_problem check with it.
+void check_double_slit_parameters(const DoubleSlitParameters& p);
+
 /// The double slit's dynamics and costs in the form the generic estimator of path_integral.hpp
 /// takes (dx = u dt + dW, no running cost, final cost x^2 / 2); the wall is not part of the model
 /// but a `HardWall` passed beside it. Also the simplest nonzero test problem after the wall.
