@@ -1,7 +1,8 @@
 // The double slit of path integral control (paper §3.1, Table 1, Figures 1-2): plain Monte
 // Carlo fails, implicit sampling with one constrained minimum per slit works. The last part
 // solves the same problem through the generic ControlProblem with a HardWall, the way you would
-// describe your own problem with walls.
+// describe your own problem with walls (double_slit_problem builds it from the parameters:
+// G = 1, Q Q^T = sigma, R = r, final cost x^2 / 2, the slits as the wall's openings).
 //
 //   ./example_double_slit
 
@@ -9,6 +10,7 @@
 #include <cstdio>
 
 #include "implicit/control/double_slit.hpp"
+#include "implicit/control/double_slit_problem.hpp"
 #include "implicit/control/path_integral.hpp"
 
 namespace ic = implicit::control;
@@ -34,18 +36,10 @@ int main() {
               100 * run.error_x, 100 * run.error_u, run.x_estimate(slit.wall_step()),
               run.x_exact(slit.wall_step()));
 
-  // The generic route: a HardWall at t1 with the two openings. The estimator finds one
-  // constrained minimum per opening and samples their mixture; frozen-wall FD for the control.
-  ic::ControlSpec<1, 1> spec;
-  spec.G << 1.0;
-  spec.noise_covariance << 1.0;  // sigma
-  spec.control_cost << 0.1;      // r, so gamma = r sigma = 0.1
-  spec.horizon = 2.0;
-  spec.dt = 0.02;
-  const ic::HardWall<1> wall{.time = 1.0, .openings = {{-6.0, -4.0}, {6.0, 8.0}}};
-  // The double slit's dynamics and costs (dx = u dt + dW, final cost x^2 / 2) as a model of the
-  // generic estimator; the wall is given beside it.
-  const ic::ControlProblem problem(ic::FreeWalkerModel{}, spec, {wall});
+  // The generic route: the same problem as a ControlProblem with a HardWall at t1 whose
+  // openings are the slits (double_slit_problem.hpp). The estimator finds one constrained
+  // minimum per opening and samples their mixture; frozen-wall FD for the control.
+  const auto problem = ic::double_slit_problem(slit.parameters());
   const auto c = ic::estimate_control(problem, implicit::Vec<1>(1.0), 0,
                                       {.samples = 50, .fd_step = 1e-3}, {.seed = 3});
   std::printf("generic HardWall: u = %.6f, log psi = %.4f (exact %.4f), ESS %.1f, %d of %d hit\n",

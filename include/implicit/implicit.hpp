@@ -4,6 +4,7 @@
 // complete.
 #include "implicit/control/controller.hpp"
 #include "implicit/control/double_slit.hpp"
+#include "implicit/control/double_slit_problem.hpp"
 #include "implicit/control/estimators.hpp"
 #include "implicit/control/himmelblau.hpp"
 #include "implicit/control/normal_tail.hpp"

@@ -58,7 +58,8 @@ void check_double_slit_parameters(const DoubleSlitParameters& p);
 
 /// The double slit's dynamics and costs in the form the generic estimator of path_integral.hpp
 /// takes (dx = u dt + dW, no running cost, final cost x^2 / 2); the wall is not part of the model
-/// but a `HardWall` passed beside it. Also the simplest nonzero test problem after the wall.
+/// but a `HardWall` passed beside it (double_slit_problem.hpp builds both from the parameters).
+/// Also the simplest nonzero test problem after the wall.
 struct FreeWalkerModel {
   template <typename T>
   Eigen::Matrix<T, 1, 1> drift(const Eigen::Matrix<T, 1, 1>& x, double) const {
