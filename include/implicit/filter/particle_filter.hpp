@@ -40,6 +40,7 @@
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
 #include "implicit/filter/kld.hpp"
+#include "implicit/filter/particle_engine.hpp"
 #include "implicit/filter/proposals.hpp"
 #include "implicit/filter/recovery.hpp"
 #include "implicit/robot/landmark_map.hpp"
@@ -150,9 +151,9 @@ class ParticleFilter {
   const Sensor& sensor() const { return sensor_; }
   const robot::LandmarkMap& map() const { return map_; }
   const FilterOptions& options() const { return options_; }
-  std::size_t size() const { return particles_.size(); }
-  std::span<const Pose> particles() const { return particles_; }
-  std::span<const double> weights() const { return weights_; }  ///< normalised
+  std::size_t size() const { return engine_.size(); }
+  std::span<const Pose> particles() const { return engine_.particles(); }
+  std::span<const double> weights() const { return engine_.weights(); }  ///< normalised
   const StepSummary& last() const { return summary_; }
 
   /// Draws the particles from N(mean, covariance) (stream step 0, purpose kInitial).
@@ -161,12 +162,11 @@ class ParticleFilter {
     require(llt.info() == Eigen::Success && covariance.allFinite(),
             "particle filter: expected a symmetric positive definite initial covariance");
     const Mat3 l = llt.matrixL();
-    parallel_for(particles_.size(), [&](std::size_t j) {
+    engine_.generate([&](std::size_t j) -> Pose {
       Rng rng({options_.seed, 0, j, purpose::kInitial});
       const Vec<3> xi = rng.normal_vector<3>();  // one call: argument order is unspecified
-      particles_[j] = mean + l * xi;
+      return mean + l * xi;
     });
-    reset_weights();
     step_ = 0;
     averages_.reset();  // a new start: the lost signal's history belongs to the old one
     summarize();
@@ -174,11 +174,10 @@ class ParticleFilter {
 
   /// Starts from given particles with equal weights.
   void initialize(std::span<const Pose> particles) {
-    require(particles.size() == particles_.size(),
-            "particle filter: expected {} initial particles, got {}", particles_.size(),
+    require(particles.size() == engine_.size(),
+            "particle filter: expected {} initial particles, got {}", engine_.size(),
             particles.size());
-    std::copy(particles.begin(), particles.end(), particles_.begin());
-    reset_weights();
+    engine_.assign(particles);
     step_ = 0;
     averages_.reset();
     summarize();
@@ -187,20 +186,8 @@ class ParticleFilter {
   /// Starts from weighted particles (log weights, not necessarily normalised), e.g. an importance
   /// sample of a global initialisation; the particle count becomes particles.size().
   void initialize(std::span<const Pose> particles, std::span<const double> log_weights) {
-    require(!particles.empty() && particles.size() == log_weights.size(),
-            "particle filter: expected as many initial log weights as particles (at least one), "
-            "got {} and {}",
-            log_weights.size(), particles.size());
-    resize(particles.size());
-    std::copy(particles.begin(), particles.end(), particles_.begin());
-    std::copy(log_weights.begin(), log_weights.end(), log_weights_.begin());
-    const double total = log_sum_exp(log_weights_);
-    require(total > -std::numeric_limits<double>::infinity() && !std::isnan(total),
-            "particle filter: expected initial log weights with a finite total, got {}", total);
-    for (std::size_t j = 0; j < log_weights_.size(); ++j) {
-      log_weights_[j] -= total;
-      weights_[j] = std::exp(log_weights_[j]);
-    }
+    engine_.assign(particles, log_weights);
+    resize_scratch(particles.size());
     step_ = 0;
     averages_.reset();
     summarize();
@@ -256,38 +243,38 @@ class ParticleFilter {
     const std::uint64_t n = step_;
     const double p = injection_probability(z);
     std::vector<char>& injected = injected_;
-    parallel_for(particles_.size(), [&](std::size_t j) {
+    engine_.move([&](std::size_t j, Pose& x) {
       stats_[j] = ParticleStats{};
       injected[j] = 0;
+      const Pose previous = x;
       if (p > 0.0) {
         // The choice has its own stream: the proposal's draws do not depend on it.
         Rng choice({options_.seed, n, j, purpose::kRecovery});
         if (choice.uniform() < p) {
           injected[j] = 1;
-          increments_[j] =
-              injected_log_weight_ + recovery_source_->draw(context_, choice, next_[j]);
-          return;
+          return injected_log_weight_ + recovery_source_->draw(context_, choice, x);
         }
       }
       Rng rng({options_.seed, n, j, Proposal::kPurpose});
-      increments_[j] =
-          proposal_.propose(context_, particles_[j], rng, next_[j], stats_[j]) + kept_log_weight_;
+      return proposal_.propose(context_, previous, rng, x, stats_[j]) + kept_log_weight_;
     });
-    std::swap(particles_, next_);
     if (fix) {
+      // The fix multiplies the target, not the proposal: valid importance sampling.
       const double info = 1.0 / (fix->std * fix->std);
       const double norm = -kLog2Pi - 2.0 * std::log(fix->std);  // log N(0; 0, std^2 I)
-      for (std::size_t j = 0; j < particles_.size(); ++j)
-        increments_[j] +=
-            norm - 0.5 * info * (particles_[j].template head<2>() - fix->position).squaredNorm();
+      const std::span<const Pose> xs = engine_.particles();
+      const std::span<double> inc = engine_.increments();
+      for (std::size_t j = 0; j < xs.size(); ++j)
+        inc[j] += norm - 0.5 * info * (xs[j].template head<2>() - fix->position).squaredNorm();
     }
 
     summary_ = StepSummary{};
     summary_.step = step_;
     summary_.updated = !z.empty() || fix != nullptr;
+    const std::span<const double> w = engine_.weights();
     for (std::size_t j = 0; j < stats_.size(); ++j) {
-      summary_.detections_used += weights_[j] * stats_[j].used;
-      summary_.detections_dropped += weights_[j] * stats_[j].dropped;
+      summary_.detections_used += w[j] * stats_[j].used;
+      summary_.detections_dropped += w[j] * stats_[j].dropped;
       summary_.newton_evaluations += stats_[j].iterations;
       summary_.fallbacks += stats_[j].fallback ? 1 : 0;
       summary_.failures += stats_[j].failed ? 1 : 0;
@@ -323,67 +310,48 @@ class ParticleFilter {
   }
 
   void resize(std::size_t m) {
-    particles_.resize(m);
-    next_.resize(m);
-    log_weights_.assign(m, -std::log(static_cast<double>(m)));
-    weights_.assign(m, 1.0 / static_cast<double>(m));
-    increments_.resize(m);
+    engine_.assign(m, Pose::Zero());
+    resize_scratch(m);
+  }
+
+  /// The per-particle scratch for m particles.
+  void resize_scratch(std::size_t m) {
     sin_.resize(m);
     cos_.resize(m);
     stats_.resize(m);
     injected_.resize(m);
   }
 
-  void reset_weights() {
-    const double m = static_cast<double>(particles_.size());
-    std::fill(log_weights_.begin(), log_weights_.end(), -std::log(m));
-    std::fill(weights_.begin(), weights_.end(), 1.0 / m);
-  }
-
   void update_weights() {
-    const std::size_t m = particles_.size();
-    for (std::size_t j = 0; j < m; ++j) log_weights_[j] += increments_[j];
-    const double inc = log_sum_exp(log_weights_);  // previous weights were normalised
-    summary_.log_likelihood_increment = inc;
-    if (!(inc > -std::numeric_limits<double>::infinity())) {
-      summary_.all_weights_zero = true;
-      reset_weights();
-    } else {
-      for (std::size_t j = 0; j < m; ++j) {
-        log_weights_[j] -= inc;
-        weights_[j] = std::exp(log_weights_[j]);
-      }
-    }
-    const double ess = effective_sample_size(weights_);
-    summary_.ess = ess;  // before resampling: the quality of this update's weights
+    const Reweighting r = engine_.reweight();
+    summary_.log_likelihood_increment = r.log_likelihood_increment;
+    summary_.all_weights_zero = r.all_weights_zero;
+    summary_.ess = r.ess;  // before resampling: the quality of this update's weights
+    const std::size_t m = engine_.size();
     if (options_.kld.enabled) {
       // KLD-sampling draws as many ancestors as the occupied bins call for, at every update.
       Rng rng({options_.seed, step_, 0, purpose::kResampling});
-      const std::vector<std::size_t> idx = kld_resample(weights_, particles_, options_.kld, rng);
-      next_.resize(idx.size());
-      for (std::size_t j = 0; j < idx.size(); ++j) next_[j] = particles_[idx[j]];
-      std::swap(particles_, next_);
-      resize(particles_.size());  // equal weights
+      engine_.resample(kld_resample(engine_.weights(), engine_.particles(), options_.kld, rng));
+      resize_scratch(engine_.size());
       summary_.resampled = true;
-    } else if (needs_resampling(ess, m, options_.resample_threshold)) {
+    } else if (needs_resampling(r.ess, m, options_.resample_threshold)) {
       Rng rng({options_.seed, step_, 0, purpose::kResampling});
-      const std::vector<std::size_t> idx = resample(options_.resampling, weights_, m, rng);
-      for (std::size_t j = 0; j < m; ++j) next_[j] = particles_[idx[j]];
-      std::swap(particles_, next_);
-      reset_weights();
+      engine_.resample(resample(options_.resampling, engine_.weights(), m, rng));
       summary_.resampled = true;
     }
   }
 
   void summarize() {
-    const std::size_t m = particles_.size();
+    const std::size_t m = engine_.size();
+    const std::span<const Pose> xs = engine_.particles();
+    const std::span<const double> w = engine_.weights();
     // The sines and cosines of the circular mean in parallel for large M (per particle, so the
     // values do not depend on the thread count; the sums below stay serial and in order). They
     // run at every 40 Hz step, serially they were ~6 % of a whole M = 10 000 run; for small M
     // the hand-off to the worker threads would cost more than it saves.
     auto trig = [&](std::size_t j) {
-      sin_[j] = std::sin(particles_[j](2));
-      cos_[j] = std::cos(particles_[j](2));
+      sin_[j] = std::sin(xs[j](2));
+      cos_[j] = std::cos(xs[j](2));
     };
     if (m >= 2048) {
       parallel_for(m, trig, 256);
@@ -392,22 +360,22 @@ class ParticleFilter {
     }
     double sx = 0.0, sy = 0.0, ss = 0.0, sc = 0.0;
     for (std::size_t j = 0; j < m; ++j) {
-      sx += weights_[j] * particles_[j](0);
-      sy += weights_[j] * particles_[j](1);
-      ss += weights_[j] * sin_[j];
-      sc += weights_[j] * cos_[j];
+      sx += w[j] * xs[j](0);
+      sy += w[j] * xs[j](1);
+      ss += w[j] * sin_[j];
+      sc += w[j] * cos_[j];
     }
     Pose mean(sx, sy, std::atan2(ss, sc));
     Mat3 cov = Mat3::Zero();
     for (std::size_t j = 0; j < m; ++j) {
-      Vec<3> d = particles_[j] - mean;
+      Vec<3> d = xs[j] - mean;
       d(2) = wrap_angle(d(2));
-      cov += weights_[j] * d * d.transpose();
+      cov += w[j] * d * d.transpose();
     }
     summary_.mean = mean;
     summary_.covariance = cov;
     summary_.particles = m;
-    if (!summary_.updated) summary_.ess = effective_sample_size(weights_);
+    if (!summary_.updated) summary_.ess = effective_sample_size(w);
   }
 
   Motion motion_;
@@ -417,8 +385,7 @@ class ParticleFilter {
   Proposal proposal_;
   FilterOptions options_;
   ProposalContext<Motion, Sensor> context_;
-  std::vector<Pose> particles_, next_;
-  std::vector<double> log_weights_, weights_, increments_;
+  ParticleEngine<Pose> engine_;
   std::vector<double> sin_, cos_;  ///< of each particle's heading (summarize's scratch)
   std::vector<ParticleStats> stats_;
   std::vector<char> injected_;  ///< per particle: drawn from the recovery source this step
