@@ -18,6 +18,7 @@
 #include "implicit/core/resampling.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/filter/particle_engine.hpp"
 #include "implicit/robot/data_association.hpp"
 #include "implicit/slam/ekf_slam.hpp"
 #include "implicit/slam/landmark_index.hpp"
@@ -171,10 +172,10 @@ class EkfSlamFilter final : public SlamFilter {
 };
 
 // ------------------------------------------------------------------------------------------
+/// A particle of particle SLAM: a pose and its own (copy-on-write) landmark map.
 struct Particle {
   Pose x = Pose::Zero();
   LandmarkMap map;
-  double log_w = 0.0;
 };
 
 struct ParticleOutcome {
@@ -203,12 +204,8 @@ class ParticleSlamFilter final : public SlamFilter {
       : opt_(opt),
         base_(motion_model(opt)),
         model_(base_),
-        m_(static_cast<std::size_t>(opt.particles)) {
-    particles_.resize(m_);
-    for (auto& p : particles_) p.x = x0;
-    next_.resize(m_);
-    log_w_.assign(m_, 0.0);
-    w_.assign(m_, 1.0 / static_cast<double>(m_));
+        m_(static_cast<std::size_t>(opt.particles)),
+        engine_(m_, Particle{x0, {}}) {
     outcome_.resize(m_);
     estimate_.mean = x0;
   }
@@ -216,7 +213,7 @@ class ParticleSlamFilter final : public SlamFilter {
   void set_step_length(double dt) override { model_ = step_model(base_, dt); }
 
   void set_known_map(std::span<const Landmark> landmarks) override {
-    require(stats_.steps == 0 && particles_[0].map.empty(),
+    require(stats_.steps == 0 && engine_.particles()[0].map.empty(),
             "particle SLAM: set_known_map must be called before the first step");
     LandmarkMap map;
     for (std::size_t k = 0; k < landmarks.size(); ++k) {
@@ -225,7 +222,7 @@ class ParticleSlamFilter final : public SlamFilter {
       slot_of_id_.push_back(static_cast<int>(k));
       id_of_slot_.push_back(static_cast<int>(k));
     }
-    for (auto& p : particles_) p.map = map;
+    for (auto& p : engine_.particles()) p.map = map;
   }
 
   void step(std::uint64_t n, const Control& u, std::span<const Observation> obs) override {
@@ -259,8 +256,9 @@ class ParticleSlamFilter final : public SlamFilter {
       }
     }
     const bool weighted = std::any_of(use_.begin(), use_.end(), [](int v) { return v != 0; });
-    parallel_for(
-        m_, [&](std::size_t j) { step_particle(j, n, u, obs, slots_before); }, 8);
+    engine_.move(
+        [&](std::size_t j, Particle& p) { return step_particle(j, p, n, u, obs, slots_before); },
+        8);
     const bool ml = opt_.association == Association::kMaximumLikelihood;
     for (const auto& oc : outcome_) {
       if (ml) {
@@ -284,12 +282,10 @@ class ParticleSlamFilter final : public SlamFilter {
         }
     }
     // Weights: normalise in the log domain, estimate, resample.
-    for (std::size_t j = 0; j < m_; ++j) log_w_[j] = particles_[j].log_w;
-    const WeightSummary ws = normalize_log_weights(log_w_, w_);
-    if (ws.all_zero) ++stats_.degenerate_steps;
-    for (std::size_t j = 0; j < m_; ++j) particles_[j].log_w = ws.all_zero ? 0.0 : std::log(w_[j]);
-    const std::size_t best =
-        static_cast<std::size_t>(std::max_element(w_.begin(), w_.end()) - w_.begin());
+    const filter::Reweighting ws = engine_.reweight();
+    if (ws.all_weights_zero) ++stats_.degenerate_steps;
+    const std::span<const double> w = engine_.weights();
+    const auto best = static_cast<std::size_t>(std::max_element(w.begin(), w.end()) - w.begin());
     if (opt_.association != Association::kKnown) {
       stats_.new_landmarks += static_cast<std::size_t>(outcome_[best].new_landmarks);
       stats_.updates += static_cast<std::size_t>(outcome_[best].updates);
@@ -299,21 +295,12 @@ class ParticleSlamFilter final : public SlamFilter {
       ++stats_.weighted_steps;
       stats_.ess_fraction_sum += ws.ess / static_cast<double>(m_);
     }
-    map_from_previous_ = false;
     if (needs_resampling(ws.ess, m_, opt_.resample_threshold)) {
       // The map estimate, like the pose estimate, uses the weights of this step BEFORE
       // resampling (spec §4): resampling only adds Monte Carlo noise to a weighted mean. The
-      // old population stays in next_ after the swap (its maps are shared, so this is free).
-      previous_w_ = w_;
-      map_from_previous_ = true;
+      // engine keeps the old population until the next move (its maps are shared: free).
       Rng rng({opt_.seed, n, 0, purpose::kResampling});
-      const auto ancestors = resample(ResamplingScheme::kSystematic, w_, m_, rng);
-      for (std::size_t j = 0; j < m_; ++j) {
-        next_[j] = particles_[ancestors[j]];
-        next_[j].log_w = 0.0;
-      }
-      particles_.swap(next_);
-      std::fill(w_.begin(), w_.end(), 1.0 / static_cast<double>(m_));
+      engine_.resample(resample(ResamplingScheme::kSystematic, w, m_, rng));
       ++stats_.resamplings;
     }
   }
@@ -322,8 +309,11 @@ class ParticleSlamFilter final : public SlamFilter {
 
   MapEstimate map() const override {
     MapEstimate out;
-    const std::vector<Particle>& particles = map_from_previous_ ? next_ : particles_;
-    const std::vector<double>& w = map_from_previous_ ? previous_w_ : w_;
+    const bool before = engine_.resampled();
+    const std::span<const Particle> particles =
+        before ? engine_.before_resampling() : engine_.particles();
+    const std::span<const double> w =
+        before ? engine_.weights_before_resampling() : engine_.weights();
     if (opt_.association == Association::kKnown) {
       const std::size_t k = particles[0].map.size();
       out.landmarks.assign(k, Landmark::Zero());
@@ -347,35 +337,38 @@ class ParticleSlamFilter final : public SlamFilter {
   std::size_t map_bytes() const override {
     std::unordered_set<const void*> seen;
     std::size_t total = 0;
-    for (const auto& p : particles_) total += p.map.unique_bytes(seen);
+    for (const auto& p : engine_.particles()) total += p.map.unique_bytes(seen);
     return total;
   }
 
  private:
   void compute_estimate() {
+    const std::span<const Particle> ps = engine_.particles();
+    const std::span<const double> w = engine_.weights();
     Pose mean = Pose::Zero();
     double sn = 0.0, cs = 0.0;
     for (std::size_t j = 0; j < m_; ++j) {
-      mean.head<2>() += w_[j] * particles_[j].x.head<2>();
-      sn += w_[j] * std::sin(particles_[j].x(2));
-      cs += w_[j] * std::cos(particles_[j].x(2));
+      mean.head<2>() += w[j] * ps[j].x.head<2>();
+      sn += w[j] * std::sin(ps[j].x(2));
+      cs += w[j] * std::cos(ps[j].x(2));
     }
     // Keep the heading on the branch of the particles (the truth is unwrapped too).
-    const double ref = particles_[0].x(2);
+    const double ref = ps[0].x(2);
     mean(2) = ref + wrap_angle(std::atan2(sn, cs) - ref);
     Mat<3> cov = Mat<3>::Zero();
     for (std::size_t j = 0; j < m_; ++j) {
-      Vec<3> d = particles_[j].x - mean;
+      Vec<3> d = ps[j].x - mean;
       d(2) = wrap_angle(d(2));
-      cov.noalias() += w_[j] * d * d.transpose();
+      cov.noalias() += w[j] * d * d.transpose();
     }
     estimate_.mean = mean;
     estimate_.cov = cov;
   }
 
-  // One particle's move, proposal, weight and map update. Writes only to slot j.
-  void step_particle(std::size_t j, std::uint64_t n, const Control& u,
-                     std::span<const Observation> obs, std::size_t slots_before) {
+  // One particle's move, proposal and map update; returns its log weight increment (-inf:
+  // weight zero). Writes only to particle j and outcome j.
+  double step_particle(std::size_t j, Particle& p, std::uint64_t n, const Control& u,
+                       std::span<const Observation> obs, std::size_t slots_before) {
     thread_local std::vector<KnownLandmark> known;
     thread_local std::vector<Measurement> fresh;
     thread_local std::vector<LandmarkTerm> terms;
@@ -384,7 +377,6 @@ class ParticleSlamFilter final : public SlamFilter {
     thread_local std::vector<std::uint32_t> candidates;
     ParticleOutcome& oc = outcome_[j];
     oc.reset();
-    Particle& p = particles_[j];
     const RangeBearingSensor& s = opt_.sensor;
     const Mat<2>& r = s.noise_covariance();
     const Pose f = model_.predict(p.x, u);
@@ -392,8 +384,7 @@ class ParticleSlamFilter final : public SlamFilter {
     const Eigen::LLT<Mat<3>> llt1(sigma1);
     if (llt1.info() != Eigen::Success || !f.allFinite()) {
       p.x = f.allFinite() ? f : p.x;
-      p.log_w = -std::numeric_limits<double>::infinity();
-      return;
+      return -std::numeric_limits<double>::infinity();
     }
     // Association against the particle's map as it was before this step.
     for (std::size_t i = 0; i < obs.size(); ++i) {
@@ -434,8 +425,7 @@ class ParticleSlamFilter final : public SlamFilter {
         SmallFactor<5> factor;
         if (!F.ok() || !factor.compute(F.hessian_at_minimizer())) {
           p.x = f;
-          p.log_w = -std::numeric_limits<double>::infinity();
-          return;
+          return -std::numeric_limits<double>::infinity();
         }
         Vec<5> sample;
         log_inc =
@@ -464,8 +454,7 @@ class ParticleSlamFilter final : public SlamFilter {
       const LinearizedProposal lp = linearized_optimal_proposal(s, f, llt1, known);
       if (!lp.ok) {
         p.x = f;
-        p.log_w = -std::numeric_limits<double>::infinity();
-        return;
+        return -std::numeric_limits<double>::infinity();
       }
       const Vec<3> xi = rng.normal_vector<3>();
       x = lp.mean + lp.L.transpose().triangularView<Eigen::Upper>().solve(xi);
@@ -493,16 +482,14 @@ class ParticleSlamFilter final : public SlamFilter {
       if (!pm.converged()) ++oc.newton_not_converged;
       if (!pose_minimum_usable(pm)) {
         p.x = f;
-        p.log_w = -std::numeric_limits<double>::infinity();
-        return;
+        return -std::numeric_limits<double>::infinity();
       }
       log_inc = linear_map(WithConstant{F}, pm.x, pm.factor, rng.normal_vector<3>(), x);
     }
 
     if (!x.allFinite() || std::isnan(log_inc)) {
       p.x = f;
-      p.log_w = -std::numeric_limits<double>::infinity();
-      return;
+      return -std::numeric_limits<double>::infinity();
     }
     p.x = x;
     // Map: EKF updates of the known landmarks at the sampled pose (not in (A)), new landmarks.
@@ -540,17 +527,14 @@ class ParticleSlamFilter final : public SlamFilter {
         ++oc.new_landmarks;
       }
     }
-    p.log_w += log_inc;
+    return log_inc;
   }
 
   SlamOptions opt_;
   robot::AnyMotionModel base_;   ///< the model at its nominal step
   robot::AnyMotionModel model_;  ///< the model for the current step length
   std::size_t m_;
-  std::vector<Particle> particles_, next_;
-  std::vector<double> log_w_, w_;
-  std::vector<double> previous_w_;  ///< weights before the last resampling (map estimate)
-  bool map_from_previous_ = false;  ///< the last step resampled: estimate from next_
+  filter::ParticleEngine<Particle> engine_;
   std::vector<ParticleOutcome> outcome_;
   std::vector<int> slot_of_id_, id_of_slot_;
   std::vector<int> slots_, use_;

@@ -93,7 +93,8 @@ class ParticleEngine {
   /// and gives them equal weights.
   template <typename Draw>
   void generate(Draw&& draw, std::size_t grain = 16) {
-    parallel_for(particles_.size(), [&](std::size_t j) { particles_[j] = draw(j); }, grain);
+    parallel_for(
+        particles_.size(), [&](std::size_t j) { particles_[j] = draw(j); }, grain);
     reset_weights();
   }
 
@@ -119,11 +120,11 @@ class ParticleEngine {
     const std::size_t m = particles_.size();
     Reweighting r;
     for (std::size_t j = 0; j < m; ++j) {
-      require(!std::isnan(increments_[j]) &&
-                  increments_[j] != std::numeric_limits<double>::infinity(),
-              "particle engine: particle {} has log weight increment {} (expected a number or "
-              "-inf)",
-              j, increments_[j]);
+      require(
+          !std::isnan(increments_[j]) && increments_[j] != std::numeric_limits<double>::infinity(),
+          "particle engine: particle {} has log weight increment {} (expected a number or "
+          "-inf)",
+          j, increments_[j]);
       log_weights_[j] += increments_[j];
     }
     const double inc = log_sum_exp(log_weights_);  // the previous weights were normalised
