@@ -6,6 +6,7 @@
 #include <limits>
 #include <unordered_set>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -23,6 +24,7 @@
 #include "implicit/slam/ekf_slam.hpp"
 #include "implicit/slam/landmark_index.hpp"
 #include "implicit/slam/landmark_map.hpp"
+#include "implicit/slam/pose_proposals.hpp"
 #include "implicit/slam/proposals.hpp"
 
 namespace implicit::slam {
@@ -64,11 +66,6 @@ robot::AnyMotionModel motion_model(const SlamOptions& o) {
 robot::AnyMotionModel step_model(const robot::AnyMotionModel& base, double dt) {
   require(dt > 0 && std::isfinite(dt), "SLAM: expected a positive step length, got {}", dt);
   return dt == base.dt() ? base : base.with_dt(dt);
-}
-
-double log_normal2(const Vec<2>& e, const Eigen::LLT<Mat<2>>& llt) {
-  const Mat<2> l = llt.matrixL();
-  return -kLog2Pi - std::log(l(0, 0)) - std::log(l(1, 1)) - 0.5 * e.dot(llt.solve(e));
 }
 
 // ------------------------------------------------------------------------------------------
@@ -193,6 +190,21 @@ struct ParticleOutcome {
   }
 };
 
+/// The pose proposal of a particle method.
+std::variant<FastSlam1Proposal, FastSlam2Proposal, ImplicitPoseProposal> pose_proposal(
+    const SlamOptions& o) {
+  switch (o.method) {
+    case SlamMethod::kFastSlam1:
+      return FastSlam1Proposal{};
+    case SlamMethod::kFastSlam2:
+      return FastSlam2Proposal{};
+    default:
+      return ImplicitPoseProposal{
+          o.method == SlamMethod::kImplicit,
+          pose_newton_options(o.newton_max_iterations, o.newton_decrement_tolerance)};
+  }
+}
+
 // Below this map size the linear scan (with its exact range check) is as fast or faster than the
 // grid look-ups: measured 3.5x faster on Victoria Park at 400-700 landmarks, 2-3x slower on the
 // dense synthetic field at 1 000 (docs/performance.md). Both give the same association.
@@ -205,7 +217,8 @@ class ParticleSlamFilter final : public SlamFilter {
         base_(motion_model(opt)),
         model_(base_),
         m_(static_cast<std::size_t>(opt.particles)),
-        engine_(m_, Particle{x0, {}}) {
+        engine_(m_, Particle{x0, {}}),
+        proposal_(pose_proposal(opt)) {
     outcome_.resize(m_);
     estimate_.mean = x0;
   }
@@ -371,22 +384,58 @@ class ParticleSlamFilter final : public SlamFilter {
                        std::span<const Observation> obs, std::size_t slots_before) {
     thread_local std::vector<KnownLandmark> known;
     thread_local std::vector<Measurement> fresh;
-    thread_local std::vector<LandmarkTerm> terms;
-    known.clear();
-    fresh.clear();
-    thread_local std::vector<std::uint32_t> candidates;
     ParticleOutcome& oc = outcome_[j];
     oc.reset();
-    const RangeBearingSensor& s = opt_.sensor;
-    const Mat<2>& r = s.noise_covariance();
     const Pose f = model_.predict(p.x, u);
     const Mat<3> sigma1 = model_.process_covariance(p.x, u);
     const Eigen::LLT<Mat<3>> llt1(sigma1);
     if (llt1.info() != Eigen::Success || !f.allFinite()) {
       p.x = f.allFinite() ? f : p.x;
-      return -std::numeric_limits<double>::infinity();
+      if (opt_.association == Association::kKnown)  // needs neither f nor Sigma1
+        associate(p, f, sigma1, obs, slots_before, known, fresh);
+      return zero_weight(p, fresh, oc);
     }
-    // Association against the particle's map as it was before this step.
+    associate(p, f, sigma1, obs, slots_before, known, fresh);
+    const PoseStep step{opt_.sensor, f, sigma1, llt1, known};
+    Rng rng({opt_.seed, n, j, std::visit([](const auto& q) { return q.kPurpose; }, proposal_)});
+    if (known.empty() && opt_.method == SlamMethod::kImplicit && fresh.size() == 1)
+      return place_with_new_landmark(p, step, fresh[0], rng, oc);
+    PoseDraw d;
+    if (known.empty()) {
+      d.x = draw_from_motion(step, rng);
+    } else {
+      d = std::visit([&](const auto& q) { return q.propose(step, rng); }, proposal_);
+      if (d.newton_solved) {
+        oc.newton_iterations += d.newton_iterations;
+        ++oc.newton_solves;
+        if (!d.newton_converged) ++oc.newton_not_converged;
+      }
+    }
+    if (d.failed || !d.x.allFinite() || std::isnan(d.log_weight)) {
+      p.x = f;
+      return zero_weight(p, fresh, oc);
+    }
+    p.x = d.x;
+    update_known(p, known, oc);
+    return add_new_landmarks(p, fresh, oc, d.log_weight);
+  }
+
+  // A particle that could not be moved gets weight zero. Under known association all particles
+  // hold the same landmark slots, so it still places this step's new landmarks (at its pose): if
+  // every weight vanishes the engine makes them uniform, and this particle may then be drawn.
+  double zero_weight(Particle& p, std::span<const Measurement> fresh, ParticleOutcome& oc) const {
+    if (opt_.association == Association::kKnown) add_new_landmarks(p, fresh, oc, 0.0);
+    return -std::numeric_limits<double>::infinity();
+  }
+
+  // The detections of this step split into known landmarks of particle p (as its map was before
+  // the step) and new ones.
+  void associate(const Particle& p, const Pose& f, const Mat<3>& sigma1,
+                 std::span<const Observation> obs, std::size_t slots_before,
+                 std::vector<KnownLandmark>& known, std::vector<Measurement>& fresh) const {
+    thread_local std::vector<std::uint32_t> candidates;
+    known.clear();
+    fresh.clear();
     for (std::size_t i = 0; i < obs.size(); ++i) {
       if (use_[i] == 0) continue;
       if (opt_.association == Association::kKnown) {
@@ -398,6 +447,7 @@ class ParticleSlamFilter final : public SlamFilter {
         continue;
       }
       // Same association either way (landmark_index.hpp); the index makes it O(1) in N.
+      const RangeBearingSensor& s = opt_.sensor;
       const auto a =
           !opt_.association_index || p.map.size() < kIndexedAssociationMinLandmarks
               ? associate_scan(p.map, s, f, sigma1, obs[i].z, opt_.gate_chi2, cov_trace_bound_)
@@ -410,124 +460,76 @@ class ParticleSlamFilter final : public SlamFilter {
         fresh.push_back(obs[i].z);
       }
     }
+  }
 
-    const bool point_landmarks = opt_.method == SlamMethod::kImplicit;
-    const bool implicit = point_landmarks || opt_.method == SlamMethod::kImplicitRb;
-    Rng rng({opt_.seed, n, j, implicit ? purpose::kReference : purpose::kProposal});
-    double log_inc = 0.0;
-    Pose x = f;
-    bool landmark_placed = false;  // (A)'s 5-D map places its new landmark itself
+  // (A), the only detection is of a new landmark: pose and landmark jointly by the 5-D linear
+  // map around the closed-form minimiser.
+  double place_with_new_landmark(Particle& p, const PoseStep& step, const Measurement& z, Rng& rng,
+                                 ParticleOutcome& oc) const {
+    const NewLandmarkObjective F(step.f, step.sigma1, z, opt_.sensor.noise_covariance());
+    SmallFactor<5> factor;
+    p.x = step.f;
+    if (!F.ok() || !factor.compute(F.hessian_at_minimizer()))
+      return zero_weight(p, std::span<const Measurement>(&z, 1), oc);
+    Vec<5> sample;
+    const double log_w =
+        linear_map(WithConstant{F}, F.minimizer(), factor, rng.normal_vector<5>(), sample) +
+        std::log(opt_.new_landmark_density) - std::log(z(0));
+    if (!sample.allFinite() || std::isnan(log_w))
+      return zero_weight(p, std::span<const Measurement>(&z, 1), oc);
+    oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()),
+                          LandmarkEstimate{sample.tail<2>(), Mat<2>::Zero()});
+    p.x = sample.head<3>();
+    p.map.push_back({sample.tail<2>(), Mat<2>::Zero()});
+    ++oc.new_landmarks;
+    return log_w;
+  }
 
-    if (known.empty()) {
-      if (point_landmarks && fresh.size() == 1) {
-        // (A), new landmark: joint 5-D linear map around the closed-form minimiser.
-        const NewLandmarkObjective F(f, sigma1, fresh[0], r);
-        SmallFactor<5> factor;
-        if (!F.ok() || !factor.compute(F.hessian_at_minimizer())) {
-          p.x = f;
-          return -std::numeric_limits<double>::infinity();
-        }
-        Vec<5> sample;
-        log_inc =
-            linear_map(WithConstant{F}, F.minimizer(), factor, rng.normal_vector<5>(), sample) +
-            std::log(opt_.new_landmark_density) - std::log(fresh[0](0));
-        oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()),
-                              LandmarkEstimate{sample.tail<2>(), Mat<2>::Zero()});
-        x = sample.head<3>();
-        p.map.push_back({sample.tail<2>(), Mat<2>::Zero()});
-        landmark_placed = true;
-        ++oc.new_landmarks;
-      } else {
-        x = f + llt1.matrixL() * rng.normal_vector<3>();
-      }
-    } else if (opt_.method == SlamMethod::kFastSlam1) {
-      x = f + llt1.matrixL() * rng.normal_vector<3>();
-      for (const auto& k : known) {
-        const Mat<2> hm = s.jacobian_landmark(x, k.mean);
-        const Eigen::LLT<Mat<2>> llt(hm * k.cov * hm.transpose() + r);
-        const Measurement nu = -RangeBearingSensor::residual(s.predict(x, k.mean), k.z);
-        log_inc += llt.info() == Eigen::Success ? log_normal2(nu, llt)
-                                                : -std::numeric_limits<double>::infinity();
-      }
-    } else if (opt_.method == SlamMethod::kFastSlam2) {
-      // Linearised optimal proposal at f; its weight includes the pose term H_x Sigma1 H_x^T.
-      const LinearizedProposal lp = linearized_optimal_proposal(s, f, llt1, known);
-      if (!lp.ok) {
-        p.x = f;
-        return -std::numeric_limits<double>::infinity();
-      }
-      const Vec<3> xi = rng.normal_vector<3>();
-      x = lp.mean + lp.L.transpose().triangularView<Eigen::Upper>().solve(xi);
-      log_inc = lp.log_weight;
-    } else {
-      // Implicit: (A) point landmarks with S = Sigma2, (B) EKF landmarks with S frozen at f.
-      terms.resize(known.size());
-      bool ok = true;
-      for (std::size_t i = 0; i < known.size(); ++i) {
-        const auto& k = known[i];
-        Mat<2> sk = r;
-        if (!point_landmarks) {
-          const Mat<2> hm = s.jacobian_landmark(f, k.mean);
-          sk += hm * k.cov * hm.transpose();
-        }
-        ok = ok && terms[i].set(k.mean, k.z, sk);
-      }
-      const PoseObjective F(f, sigma1, terms);
-      PoseMinimum pm;
-      if (ok && F.ok())
-        pm = newton_minimize<SmallFactor<3>>(
-            F, f, pose_newton_options(opt_.newton_max_iterations, opt_.newton_decrement_tolerance));
-      oc.newton_iterations += pm.iterations;
-      ++oc.newton_solves;
-      if (!pm.converged()) ++oc.newton_not_converged;
-      if (!pose_minimum_usable(pm)) {
-        p.x = f;
-        return -std::numeric_limits<double>::infinity();
-      }
-      log_inc = linear_map(WithConstant{F}, pm.x, pm.factor, rng.normal_vector<3>(), x);
-    }
-
-    if (!x.allFinite() || std::isnan(log_inc)) {
-      p.x = f;
-      return -std::numeric_limits<double>::infinity();
-    }
-    p.x = x;
-    // Map: EKF updates of the known landmarks at the sampled pose (not in (A)), new landmarks.
-    if (!point_landmarks) {
-      for (const auto& k : known) {
-        LandmarkEstimate l{k.mean, k.cov};
-        const Mat<2> hm = s.jacobian_landmark(x, l.mean);
-        const Eigen::LLT<Mat<2>> llt(hm * l.cov * hm.transpose() + r);
-        if (llt.info() != Eigen::Success) continue;
-        const Measurement nu = -RangeBearingSensor::residual(s.predict(x, l.mean), k.z);
-        const Eigen::Matrix<double, 2, 2> pht = l.cov * hm.transpose();
-        const Mat<2> gain = llt.solve(pht.transpose()).transpose();
-        l.mean += gain * nu;
-        const Mat<2> a = Mat<2>::Identity() - gain * hm;
-        Mat<2> c = a * l.cov * a.transpose() + gain * r * gain.transpose();
-        l.cov = 0.5 * (c + c.transpose());
-        p.map.set(k.slot, l);
-        // Registered again when it changed cell or covariance class (and for the trace bound).
-        if (opt_.association == Association::kMaximumLikelihood)
-          oc.moved.emplace_back(static_cast<std::uint32_t>(k.slot), l);
-        ++oc.updates;
-      }
-    } else {
+  // EKF updates of the known landmarks at the sampled pose; (A)'s point landmarks stay fixed.
+  void update_known(Particle& p, std::span<const KnownLandmark> known, ParticleOutcome& oc) const {
+    if (opt_.method == SlamMethod::kImplicit) {
       oc.updates += static_cast<int>(known.size());
+      return;
     }
-    if (!landmark_placed) {
-      for (const Measurement& z : fresh) {
-        const Mat<2> gz = RangeBearingSensor::inverse_jacobian_measurement(x, z);
-        const LandmarkEstimate fresh_landmark{
-            RangeBearingSensor::inverse(x, z),
-            point_landmarks ? Mat<2>::Zero() : Mat<2>(gz * r * gz.transpose())};
-        oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()), fresh_landmark);
-        p.map.push_back(fresh_landmark);
-        log_inc += std::log(opt_.new_landmark_density);
-        ++oc.new_landmarks;
-      }
+    const RangeBearingSensor& s = opt_.sensor;
+    const Mat<2>& r = s.noise_covariance();
+    for (const auto& k : known) {
+      LandmarkEstimate l{k.mean, k.cov};
+      const Mat<2> hm = s.jacobian_landmark(p.x, l.mean);
+      const Eigen::LLT<Mat<2>> llt(hm * l.cov * hm.transpose() + r);
+      if (llt.info() != Eigen::Success) continue;
+      const Measurement nu = -RangeBearingSensor::residual(s.predict(p.x, l.mean), k.z);
+      const Eigen::Matrix<double, 2, 2> pht = l.cov * hm.transpose();
+      const Mat<2> gain = llt.solve(pht.transpose()).transpose();
+      l.mean += gain * nu;
+      const Mat<2> a = Mat<2>::Identity() - gain * hm;
+      Mat<2> c = a * l.cov * a.transpose() + gain * r * gain.transpose();
+      l.cov = 0.5 * (c + c.transpose());
+      p.map.set(k.slot, l);
+      // Registered again when it changed cell or covariance class (and for the trace bound).
+      if (opt_.association == Association::kMaximumLikelihood)
+        oc.moved.emplace_back(static_cast<std::uint32_t>(k.slot), l);
+      ++oc.updates;
     }
-    return log_inc;
+  }
+
+  // New landmarks placed by inverting the detections at the sampled pose; each contributes the
+  // density p0 to the weight (spec §3.10). Returns log_w with those factors.
+  double add_new_landmarks(Particle& p, std::span<const Measurement> fresh, ParticleOutcome& oc,
+                           double log_w) const {
+    const bool point_landmarks = opt_.method == SlamMethod::kImplicit;
+    const Mat<2>& r = opt_.sensor.noise_covariance();
+    for (const Measurement& z : fresh) {
+      const Mat<2> gz = RangeBearingSensor::inverse_jacobian_measurement(p.x, z);
+      const LandmarkEstimate fresh_landmark{
+          RangeBearingSensor::inverse(p.x, z),
+          point_landmarks ? Mat<2>::Zero() : Mat<2>(gz * r * gz.transpose())};
+      oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()), fresh_landmark);
+      p.map.push_back(fresh_landmark);
+      log_w += std::log(opt_.new_landmark_density);
+      ++oc.new_landmarks;
+    }
+    return log_w;
   }
 
   SlamOptions opt_;
@@ -535,6 +537,8 @@ class ParticleSlamFilter final : public SlamFilter {
   robot::AnyMotionModel model_;  ///< the model for the current step length
   std::size_t m_;
   filter::ParticleEngine<Particle> engine_;
+  /// The pose proposal of opt_.method (EKF-SLAM is not a particle method).
+  std::variant<FastSlam1Proposal, FastSlam2Proposal, ImplicitPoseProposal> proposal_;
   std::vector<ParticleOutcome> outcome_;
   std::vector<int> slot_of_id_, id_of_slot_;
   std::vector<int> slots_, use_;
