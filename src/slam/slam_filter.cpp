@@ -20,6 +20,7 @@
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
 #include "implicit/filter/particle_engine.hpp"
+#include "implicit/filter/pose_moments.hpp"
 #include "implicit/robot/data_association.hpp"
 #include "implicit/slam/ekf_slam.hpp"
 #include "implicit/slam/landmark_index.hpp"
@@ -356,26 +357,11 @@ class ParticleSlamFilter final : public SlamFilter {
 
  private:
   void compute_estimate() {
-    const std::span<const Particle> ps = engine_.particles();
-    const std::span<const double> w = engine_.weights();
-    Pose mean = Pose::Zero();
-    double sn = 0.0, cs = 0.0;
-    for (std::size_t j = 0; j < m_; ++j) {
-      mean.head<2>() += w[j] * ps[j].x.head<2>();
-      sn += w[j] * std::sin(ps[j].x(2));
-      cs += w[j] * std::cos(ps[j].x(2));
-    }
-    // Keep the heading on the branch of the particles (the truth is unwrapped too).
-    const double ref = ps[0].x(2);
-    mean(2) = ref + wrap_angle(std::atan2(sn, cs) - ref);
-    Mat<3> cov = Mat<3>::Zero();
-    for (std::size_t j = 0; j < m_; ++j) {
-      Vec<3> d = ps[j].x - mean;
-      d(2) = wrap_angle(d(2));
-      cov.noalias() += w[j] * d * d.transpose();
-    }
-    estimate_.mean = mean;
-    estimate_.cov = cov;
+    // Headings stay on the branch of the particles (the truth is unwrapped too).
+    const auto& moments = pose_moments_(engine_.particles(), engine_.weights(),
+                                        [](const Particle& p) -> const Pose& { return p.x; });
+    estimate_.mean = moments.mean;
+    estimate_.cov = moments.covariance;
   }
 
   // One particle's move, proposal and map update; returns its log weight increment (-inf:
@@ -537,6 +523,7 @@ class ParticleSlamFilter final : public SlamFilter {
   robot::AnyMotionModel model_;  ///< the model for the current step length
   std::size_t m_;
   filter::ParticleEngine<Particle> engine_;
+  filter::PoseMoments pose_moments_{true};
   /// The pose proposal of opt_.method (EKF-SLAM is not a particle method).
   std::variant<FastSlam1Proposal, FastSlam2Proposal, ImplicitPoseProposal> proposal_;
   std::vector<ParticleOutcome> outcome_;

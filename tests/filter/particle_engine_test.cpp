@@ -1,7 +1,9 @@
-// The generic sequential Monte Carlo engine (filter/particle_engine.hpp): reweighting against
-// closed forms, resampling bookkeeping, bad increments, thread-count independence, and the
-// bootstrap estimate of a Gaussian evidence against its closed form.
+// The generic sequential Monte Carlo engine (filter/particle_engine.hpp) and the pose collector
+// (filter/pose_moments.hpp): reweighting against closed forms, resampling bookkeeping, bad
+// increments, thread-count independence, the bootstrap estimate of a Gaussian evidence against
+// its closed form, and the circular mean across the heading cut.
 #include "implicit/filter/particle_engine.hpp"
+#include "implicit/filter/pose_moments.hpp"
 
 #include <gtest/gtest.h>
 
@@ -174,6 +176,34 @@ TEST(ParticleEngine, TheResultDoesNotDependOnTheThreadCount) {
   }
   EXPECT_EQ(w1, w2);
   EXPECT_EQ(x1, x2);
+}
+
+}  // namespace
+}  // namespace implicit::filter
+
+namespace implicit::filter {
+namespace {
+
+// Two poses on either side of the heading cut at +-pi: the circular mean is pi (not 0), the
+// heading deviations are +-0.1 (wrapped), and keep_branch puts the mean on the first pose's
+// branch (3 pi here, an unwrapped heading).
+TEST(PoseMoments, CircularMeanAndWrappedCovarianceAgainstTheClosedForm) {
+  const std::vector<Vec<3>> poses = {Vec<3>(1.0, 0.0, kPi - 0.1), Vec<3>(3.0, 2.0, -kPi + 0.1)};
+  const std::vector<double> w = {0.5, 0.5};
+  auto pose_of = [](const Vec<3>& x) -> const Vec<3>& { return x; };
+  PoseMoments moments;
+  const auto& m = moments(poses, w, pose_of);
+  EXPECT_NEAR(m.mean(0), 2.0, 1e-15);
+  EXPECT_NEAR(m.mean(1), 1.0, 1e-15);
+  EXPECT_NEAR(std::abs(m.mean(2)), kPi, 1e-14);
+  EXPECT_NEAR(m.covariance(0, 0), 1.0, 1e-14);
+  EXPECT_NEAR(m.covariance(0, 1), 1.0, 1e-14);
+  EXPECT_NEAR(m.covariance(2, 2), 0.01, 1e-14);
+  EXPECT_NEAR(m.covariance(0, 2), 0.1, 1e-14);  // deviations (-1, -0.1) and (1, 0.1)
+  std::vector<Vec<3>> unwrapped = poses;
+  unwrapped[0](2) += 2.0 * kPi;
+  PoseMoments branch(true);
+  EXPECT_NEAR(branch(unwrapped, w, pose_of).mean(2), 3.0 * kPi, 1e-13);
 }
 
 }  // namespace

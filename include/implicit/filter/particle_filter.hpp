@@ -41,6 +41,7 @@
 #include "implicit/core/weights.hpp"
 #include "implicit/filter/kld.hpp"
 #include "implicit/filter/particle_engine.hpp"
+#include "implicit/filter/pose_moments.hpp"
 #include "implicit/filter/proposals.hpp"
 #include "implicit/filter/recovery.hpp"
 #include "implicit/robot/landmark_map.hpp"
@@ -316,8 +317,6 @@ class ParticleFilter {
 
   /// The per-particle scratch for m particles.
   void resize_scratch(std::size_t m) {
-    sin_.resize(m);
-    cos_.resize(m);
     stats_.resize(m);
     injected_.resize(m);
   }
@@ -342,40 +341,12 @@ class ParticleFilter {
   }
 
   void summarize() {
-    const std::size_t m = engine_.size();
-    const std::span<const Pose> xs = engine_.particles();
-    const std::span<const double> w = engine_.weights();
-    // The sines and cosines of the circular mean in parallel for large M (per particle, so the
-    // values do not depend on the thread count; the sums below stay serial and in order). They
-    // run at every 40 Hz step, serially they were ~6 % of a whole M = 10 000 run; for small M
-    // the hand-off to the worker threads would cost more than it saves.
-    auto trig = [&](std::size_t j) {
-      sin_[j] = std::sin(xs[j](2));
-      cos_[j] = std::cos(xs[j](2));
-    };
-    if (m >= 2048) {
-      parallel_for(m, trig, 256);
-    } else {
-      for (std::size_t j = 0; j < m; ++j) trig(j);
-    }
-    double sx = 0.0, sy = 0.0, ss = 0.0, sc = 0.0;
-    for (std::size_t j = 0; j < m; ++j) {
-      sx += w[j] * xs[j](0);
-      sy += w[j] * xs[j](1);
-      ss += w[j] * sin_[j];
-      sc += w[j] * cos_[j];
-    }
-    Pose mean(sx, sy, std::atan2(ss, sc));
-    Mat3 cov = Mat3::Zero();
-    for (std::size_t j = 0; j < m; ++j) {
-      Vec<3> d = xs[j] - mean;
-      d(2) = wrap_angle(d(2));
-      cov += w[j] * d * d.transpose();
-    }
-    summary_.mean = mean;
-    summary_.covariance = cov;
-    summary_.particles = m;
-    if (!summary_.updated) summary_.ess = effective_sample_size(w);
+    const auto& moments = pose_moments_(engine_.particles(), engine_.weights(),
+                                        [](const Pose& x) -> const Pose& { return x; });
+    summary_.mean = moments.mean;
+    summary_.covariance = moments.covariance;
+    summary_.particles = engine_.size();
+    if (!summary_.updated) summary_.ess = effective_sample_size(engine_.weights());
   }
 
   Motion motion_;
@@ -386,7 +357,7 @@ class ParticleFilter {
   FilterOptions options_;
   ProposalContext<Motion, Sensor> context_;
   ParticleEngine<Pose> engine_;
-  std::vector<double> sin_, cos_;  ///< of each particle's heading (summarize's scratch)
+  PoseMoments pose_moments_;  ///< the estimate (the collector keeps its scratch)
   std::vector<ParticleStats> stats_;
   std::vector<char> injected_;  ///< per particle: drawn from the recovery source this step
   std::shared_ptr<RecoverySource<Context>> recovery_source_;
