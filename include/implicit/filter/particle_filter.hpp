@@ -1,5 +1,6 @@
 #pragma once
-// The sequential Monte Carlo engine for localization: one engine, proposals as plug-ins.
+// Monte Carlo localization: the generic engine (particle_engine.hpp) with a pose as the particle,
+// proposals as plug-ins (proposals.hpp) and the pose collector (pose_moments.hpp).
 //
 //   using namespace implicit;
 //   filter::ParticleFilter pf(robot::UteModel(), robot::RangeBearingSensor(), map,
