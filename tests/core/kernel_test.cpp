@@ -312,6 +312,33 @@ TEST(RandomMapRay, InfiniteOnTheWholeRayIsAJumpAtZero) {
   EXPECT_EQ(calls, 202);
 }
 
+// g = NaN outside the support is +inf: the same status, root and evaluations as the +inf variant
+// (a NaN taken for "below the level" would push the bracket past the support).
+TEST(RandomMapRay, NanOutsideTheSupportIsInfinite) {
+  for (double outside :
+       {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+    int calls = 0;
+    // F = lambda^2 / 2 up to the edge at lambda = 1.5, outside beyond: the root sqrt(2 * 0.5 * 4)
+    // = 2 lies outside, so the ray jumps over the level; with the edge at 3 the root 2 is found.
+    for (double edge : {1.5, 3.0}) {
+      auto g = [&](double l, double* s) {
+        ++calls;
+        if (s) *s = l;
+        return l > edge ? outside : 0.5 * l * l - 2.0;
+      };
+      double lambda = 0.0, slope = 0.0;
+      const RayStatus st = solve_random_map_ray(g, 4.0, 2.0, lambda, slope);
+      if (edge < 2.0) {
+        EXPECT_EQ(st, RayStatus::kJump) << outside;
+      } else {
+        EXPECT_EQ(st, RayStatus::kOk) << outside;
+        EXPECT_NEAR(lambda, 2.0, 1e-12) << outside;
+      }
+    }
+    EXPECT_LT(calls, 120) << outside;
+  }
+}
+
 // Rays with a root keep their iterates: the roots and evaluation counts recorded from the solver
 // before the jump at 0 was recognised (x86-64, bit for bit; 4 ulps allow for contracted
 // multiply-adds elsewhere). `steep` is approached by Newton from above (lo stays 0 until the

@@ -76,8 +76,13 @@ double linear_map(const F& f, const typename Factor::Vector& mu, const Factor& f
 /// whose lower end is 0; a root below that hi would need F to climb rho / 2 within a tolerance's
 /// fraction of the quadratic model's root sqrt(rho)).
 template <typename G>
-RayStatus solve_random_map_ray(const G& g_of, double rho, double level, double& lambda,
+RayStatus solve_random_map_ray(const G& g_in, double rho, double level, double& lambda,
                                double& slope, const RandomMapOptions& options = {}) {
+  // NaN means outside the support, like +inf (the comparisons below would take it for "below").
+  auto g_of = [&g_in](double l, double* s) {
+    const double g = g_in(l, s);
+    return std::isnan(g) ? std::numeric_limits<double>::infinity() : g;
+  };
   double lo = 0.0, hi = std::sqrt(rho);
   const double jump_at_zero = options.relative_tolerance * hi;
   double ghi = g_of(hi, nullptr);
