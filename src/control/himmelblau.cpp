@@ -5,6 +5,7 @@
 
 #include <Eigen/LU>
 
+#include "implicit/control/controller.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/log_weight.hpp"
 #include "implicit/core/target.hpp"
@@ -118,70 +119,46 @@ double himmelblau_path_function(const HimmelblauProblem& pb, const Vec<2>& x,
   return f + himmelblau(prev) / pb.gamma();
 }
 
-namespace {
-// Log weights of the linear map for reference variables xi (2n x M) around `lp`.
-double log_psi_hat(const HimmelblauProblem& pb, const HimmelblauLaplace& lp,
-                   const Eigen::MatrixXd& xi, std::vector<double>& lw) {
-  const Eigen::VectorXd mu = lp.path();
-  // psi = Z / (2 pi sigma dt)^n (2n path coordinates): the implicit weights of exp(-F) over the
-  // path measure's normaliser.
-  const double log_path_norm = lp.n * (kLog2Pi + std::log(pb.sigma * pb.dt));
-  const int m = static_cast<int>(mu.size());
-  lw.resize(static_cast<std::size_t>(xi.cols()));
-  Eigen::VectorXd y(mu.size());
-  for (Eigen::Index j = 0; j < xi.cols(); ++j) {
-    y = xi.col(j);
-    lp.factor.upper_solve_in_place(y);
-    y += mu;
-    lw[static_cast<std::size_t>(j)] =
-        implicit_log_weight(m, xi.col(j).squaredNorm(), himmelblau_path_function(pb, lp.x, y),
-                            lp.log_det_L) -
-        log_path_norm;
-  }
-  return log_mean_exp(lw);
+HimmelblauControlProblem himmelblau_control_problem(const HimmelblauProblem& pb) {
+  pb.validate();
+  ControlSpec<2, 2> spec;
+  spec.G.setIdentity();
+  spec.noise_covariance = pb.sigma * Mat<2>::Identity();
+  spec.control_cost = pb.control_cost * Mat<2>::Identity();
+  spec.horizon = pb.final_time;
+  spec.dt = pb.dt;
+  return HimmelblauControlProblem(HimmelblauModel{}, spec);
 }
 
-MinimizeStatus worse(MinimizeStatus a, MinimizeStatus b) {
-  return a == MinimizeStatus::kConverged ? b : a;
+HimmelblauEstimate himmelblau_control(const HimmelblauControlProblem& problem, const Vec<2>& x,
+                                      int k, int M, const Vec<2>& warm, const StreamKey& key) {
+  const int K = problem.num_steps();
+  require(k >= 0 && k < K, "Himmelblau control: expected a step in [0, {}), got {}", K, k);
+  require(M >= 1, "Himmelblau control: expected at least 1 sample, got {}", M);
+  require(x.allFinite() && warm.allFinite(),
+          "Himmelblau control: expected a finite state and start");
+  const int n = K - k;
+  Eigen::VectorXd start(2 * n);
+  for (int i = 1; i <= n; ++i) start.segment<2>(2 * (i - 1)) = x + (warm - x) * (double(i) / n);
+  const auto c = estimate_control(problem, x, k, {.samples = M, .fd_step = 1e-4}, key, start);
+  HimmelblauEstimate est;
+  est.u = c.u;
+  est.log_psi = c.psi.log_psi;
+  est.ess = c.psi.ess;
+  est.end = c.psi.minimizer.tail<2>();
+  est.laplace_u = (est.end - x) / (n * problem.dt());
+  est.status = c.worst_status;
+  return est;
 }
-}  // namespace
 
 HimmelblauEstimate himmelblau_control(const HimmelblauProblem& pb, const Vec<2>& x, int k, int M,
                                       const Vec<2>& warm, const StreamKey& key) {
-  require(M >= 1, "Himmelblau control: expected at least 1 sample, got {}", M);
-  const HimmelblauLaplace at_x = himmelblau_laplace(pb, x, k, warm);
-  const int n = at_x.n;
-  Eigen::MatrixXd xi(2 * n, M);
-  Rng rng({key.seed, key.step, key.index, purpose::kReference});
-  rng.fill_normal(xi);
-  std::vector<double> lw;
-  HimmelblauEstimate est;
-  est.log_psi = log_psi_hat(pb, at_x, xi, lw);
-  {
-    std::vector<double> wbar(lw.size());
-    est.ess = normalize_log_weights(lw, wbar).ess;
-  }
-  est.end = at_x.end;
-  est.log_det_L = at_x.log_det_L;
-  est.status = at_x.status;
-  est.laplace_u = (at_x.end - x) / (n * pb.dt);
-  const double h = 1e-4 * std::max(1.0, x.norm());
-  for (int i = 0; i < 2; ++i) {
-    Vec<2> xp = x, xm = x;
-    xp(i) += h;
-    xm(i) -= h;
-    // Common random numbers: the same xi at x + h and x - h; re-minimise warm-started at z*(x).
-    const auto lp = himmelblau_laplace(pb, xp, k, at_x.end);
-    const auto lm = himmelblau_laplace(pb, xm, k, at_x.end);
-    est.status = worse(worse(est.status, lp.status), lm.status);
-    est.u(i) = pb.sigma * (log_psi_hat(pb, lp, xi, lw) - log_psi_hat(pb, lm, xi, lw)) / (2.0 * h);
-  }
-  return est;
+  return himmelblau_control(himmelblau_control_problem(pb), x, k, M, warm, key);
 }
 
 HimmelblauRun simulate_himmelblau_run(const HimmelblauProblem& pb, int M, std::uint64_t seed,
                                       std::uint64_t run) {
-  pb.validate();
+  const auto problem = himmelblau_control_problem(pb);
   const int K = pb.num_steps();
   Rng noise({seed, run, 0, purpose::kProcessNoise});
   HimmelblauRun r;
@@ -189,7 +166,7 @@ HimmelblauRun simulate_himmelblau_run(const HimmelblauProblem& pb, int M, std::u
   Vec<2> warm = pb.x0;
   const double sd = std::sqrt(pb.sigma * pb.dt);
   for (int k = 0; k < K; ++k) {
-    const auto est = himmelblau_control(pb, r.x.back(), k, M, warm,
+    const auto est = himmelblau_control(problem, r.x.back(), k, M, warm,
                                         {seed, run, static_cast<std::uint64_t>(k), 0});
     warm = est.end;
     r.ess_mean += est.ess / K;

@@ -191,6 +191,29 @@ TEST(Rng, NormalVectorUsesTheStream) {
   EXPECT_EQ(d.size(), 7);
 }
 
+// Replaying after rewind() gives the stream's own sequence, whether the vectors were kept or
+// (past max_kept) drawn again; odd sizes check that the cached second Box-Muller normal is kept
+// in step too.
+TEST(Rng, ReplayableNormalsReplayTheStream) {
+  const implicit::StreamKey key{11, 2, 3, implicit::purpose::kReference};
+  for (const std::size_t max_kept : {std::size_t{1} << 20, std::size_t{20}, std::size_t{0}}) {
+    implicit::Rng rng(key);
+    Eigen::VectorXd expected(7 * 5);
+    rng.fill_normal(expected);
+    implicit::ReplayableNormals replay(key, max_kept);
+    Eigen::VectorXd xi(7);
+    for (int pass = 0; pass < 3; ++pass) {
+      replay.rewind();
+      const int vectors = pass == 0 ? 3 : 5 - 2 * (pass - 1);  // 3, 5, 3: a pass past the last
+      for (int j = 0; j < vectors; ++j) {
+        replay.next(xi);
+        for (int i = 0; i < 7; ++i)
+          EXPECT_EQ(xi(i), expected(7 * j + i)) << "max_kept " << max_kept << " pass " << pass;
+      }
+    }
+  }
+}
+
 TEST(Parallel, ForVisitsEveryIndexOnce) {
   for (std::size_t n : {0u, 1u, 15u, 16u, 17u, 1000u}) {
     std::vector<int> hits(n, 0);

@@ -26,22 +26,28 @@ struct ControlEstimate {
 };
 
 /// u = gamma R^-1 G^T grad log psi_hat by central differences with common random numbers: the
-/// same reference variables at x + h e_i and x - h e_i, minimisers warm-started at mu(x).
+/// same reference variables at x + h e_i and x - h e_i, minimisers warm-started at mu(x). `warm`
+/// (a path y_1..y_n, e.g. the previous step's minimiser shifted by one step) starts the
+/// minimisation at x; empty: the drift path.
 template <typename Problem>
 ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
                                                        const Vec<Problem::kStateDim>& x, int k,
                                                        const EstimatorOptions& o,
-                                                       const StreamKey& key) {
+                                                       const StreamKey& key,
+                                                       const Eigen::VectorXd& warm = {}) {
   constexpr int D = Problem::kStateDim;
   const std::vector<WallMode>* frozen = nullptr;
-  auto psi = [&](const Vec<D>& xp, const Eigen::VectorXd& warm) {
+  // The references are drawn once, at x, and replayed at every x +- h e_i.
+  ReplayableNormals references({key.seed, key.step, key.index, purpose::kReference});
+  auto psi = [&](const Vec<D>& xp, const Eigen::VectorXd& start) {
+    references.rewind();
     return o.method == PsiMethod::kImplicit
-               ? estimate_log_psi_implicit(problem, xp, k, o.samples, key, warm, o.minimize, o.map,
-                                           frozen)
+               ? estimate_log_psi_implicit(problem, xp, k, o.samples, key, start, o.minimize, o.map,
+                                           frozen, &references)
                : estimate_log_psi_monte_carlo(problem, xp, k, o.samples, key);
   };
   ControlEstimate<Problem::kControlDim> c;
-  c.psi = psi(x, Eigen::VectorXd());
+  c.psi = psi(x, warm);
   if (o.freeze_walls && !c.psi.modes.empty()) frozen = &c.psi.modes;
   c.worst_status = c.psi.status;
   const double h = o.fd_step * std::max(1.0, x.cwiseAbs().maxCoeff());

@@ -82,10 +82,10 @@ inline PsiEstimate summarize(std::vector<double>& lw) {
 }
 
 /// Implicit sampling of psi without walls ahead: minimise F from `start`, then M samples with
-/// the linear or the random map from the reference stream `rng`.
+/// the linear or the random map from the reference stream `refs`.
 template <typename Problem, typename PathF>
 PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
-                                 const Eigen::VectorXd& start, int M, Rng& rng,
+                                 const Eigen::VectorXd& start, int M, ReplayableNormals& refs,
                                  const MinimizeOptions& options, SamplingMap map) {
   constexpr int D = Problem::kStateDim;
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
@@ -107,12 +107,12 @@ PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
   int failures = 0;
   if (map == SamplingMap::kLinear) {
     for (int j = 0; j < M; ++j) {
-      rng.fill_normal(xi);
+      refs.next(xi);
       lw[static_cast<std::size_t>(j)] = linear_map(F, r.x, r.factor, xi, y) - log_norm;
     }
   } else {
     for (int j = 0; j < M; ++j) {
-      rng.fill_normal(xi);
+      refs.next(xi);
       const double rho = xi.squaredNorm();
       // The ray direction d = L^{-T} xi / |xi|, in xi's storage (xi is not needed after rho; an
       // assignment to a second vector trips GCC 12's -Wuse-after-free inside Eigen).
@@ -296,13 +296,13 @@ RayStatus random_map_in_mode(const PathF& F, const WallsAhead<Problem>& w,
 }
 
 /// Implicit sampling of psi with walls ahead: a mixture over the wall modes (fit_wall_modes),
-/// component choice from stream (key..., kMixture), references from `rng`.
+/// component choice from stream (key..., kMixture), references from `refs`.
 template <typename Problem, typename PathF>
 PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateDim>& x, int k,
                               const PathF& F, const WallsAhead<Problem>& w,
-                              const Eigen::VectorXd& start, int M, const StreamKey& key, Rng& rng,
-                              const MinimizeOptions& options, SamplingMap map,
-                              const std::vector<WallMode>* frozen) {
+                              const Eigen::VectorXd& start, int M, const StreamKey& key,
+                              ReplayableNormals& refs, const MinimizeOptions& options,
+                              SamplingMap map, const std::vector<WallMode>* frozen) {
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
   const int n = F.num_blocks(), N = static_cast<int>(start.size());
   auto mix = fit_wall_modes(F, w, start, frozen, options);
@@ -323,7 +323,7 @@ PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateD
       a_d(static_cast<std::size_t>(w.size()));
   for (int j = 0; j < M; ++j) {
     const std::size_t c = mix.choose(pick.uniform());
-    rng.fill_normal(xi);
+    refs.next(xi);
     ++mix.modes[c].samples;
     double& l = lw[static_cast<std::size_t>(j)];
     if (map == SamplingMap::kRandom) {
@@ -379,13 +379,16 @@ PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateD
 /// and walls, a sample chooses mode c with probability pi_c and runs the random map of F
 /// restricted to c's openings; its weight is divided by pi_c (the random map has no proposal
 /// density in closed form, so the modes cannot share samples as the linear mixture does).
+/// `references` (rewound, on the stream of `key` with purpose kReference) replays references
+/// drawn for an earlier estimate instead of drawing them again: the same numbers, faster.
 template <typename Problem>
 PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem::kStateDim>& x,
                                       int k, int M, const StreamKey& key,
                                       const Eigen::VectorXd& warm = {},
                                       const MinimizeOptions& options = {},
                                       SamplingMap map = SamplingMap::kLinear,
-                                      const std::vector<WallMode>* frozen = nullptr) {
+                                      const std::vector<WallMode>* frozen = nullptr,
+                                      ReplayableNormals* references = nullptr) {
   constexpr int D = Problem::kStateDim;
   require(M >= 1, "path integral estimator: expected at least 1 sample, got {}", M);
   const auto F = problem.path_function(x, k);
@@ -400,10 +403,11 @@ PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem:
   }
   const detail::WallsAhead<Problem> ahead(problem, k);
   const Eigen::VectorXd start = warm.size() == N ? warm : problem.drift_path(x, k);
-  Rng rng({key.seed, key.step, key.index, purpose::kReference});
+  ReplayableNormals own({key.seed, key.step, key.index, purpose::kReference}, 0);
+  ReplayableNormals& refs = references ? *references : own;
   if (ahead.size() == 0)
-    return detail::sample_without_walls(problem, F, start, M, rng, options, map);
-  return detail::sample_with_walls(problem, x, k, F, ahead, start, M, key, rng, options, map,
+    return detail::sample_without_walls(problem, F, start, M, refs, options, map);
+  return detail::sample_with_walls(problem, x, k, F, ahead, start, M, key, refs, options, map,
                                    frozen);
 }
 

@@ -8,9 +8,10 @@
 //
 //   F(y) = sum |y_i - y_{i-1}|^2 / (2 sigma dt) + f(y_n) / gamma,   gamma = sigma R (spec E20).
 //
-// For a fixed end point z = y_n the optimal path is a straight line, so the minimiser comes from
-// the 2-D function G(z) = |z - x|^2/(2 sigma n dt) + f(z)/gamma; the Hessian of F is block
-// tridiagonal (2x2 blocks), factorised in O(n).
+// The estimator is the generic one (estimators.hpp, controller.hpp) on HimmelblauModel. For a
+// fixed end point z = y_n the optimal path is a straight line, so the minimiser also comes from
+// the 2-D function G(z) = |z - x|^2/(2 sigma n dt) + f(z)/gamma: himmelblau_laplace computes it
+// that way, an independent check of the generic path minimum and the start of its search.
 //
 //   implicit::control::HimmelblauProblem pb;                          // R = sigma = 0.01, dt = 1
 //   auto est = implicit::control::himmelblau_control(pb, pb.x0, 0, 50, pb.x0, {.seed = 3});
@@ -24,6 +25,7 @@
 
 #include <Eigen/Core>
 
+#include "implicit/control/problem.hpp"
 #include "implicit/core/banded.hpp"
 #include "implicit/core/minimize.hpp"
 #include "implicit/core/rng.hpp"
@@ -73,18 +75,47 @@ HimmelblauLaplace himmelblau_laplace(const HimmelblauProblem& pb, const Vec<2>& 
 double himmelblau_path_function(const HimmelblauProblem& pb, const Vec<2>& x,
                                 const Eigen::VectorXd& y);
 
+/// Himmelblau's problem as a generic control problem (problem.hpp): no drift, no running cost,
+/// final cost f, G = I, Q Q^T = sigma I, R = R I (so gamma = sigma R by condition (8)). The
+/// estimator and the closed loop below run on it, through the same estimate_control a user's
+/// problem goes through.
+struct HimmelblauModel {
+  template <typename T>
+  Eigen::Matrix<T, 2, 1> drift(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    return x * 0.0;
+  }
+  template <typename T>
+  T running_cost(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    return x(0) * 0.0;
+  }
+  template <typename T>
+  T final_cost(const Eigen::Matrix<T, 2, 1>& x) const {
+    const T a = x(0) * x(0) + x(1) - 11.0;
+    const T b = x(0) + x(1) * x(1) - 7.0;
+    return a * a + b * b;
+  }
+};
+using HimmelblauControlProblem = ControlProblem<2, 2, HimmelblauModel>;
+
+/// Throws InvalidArgument for a bad problem (HimmelblauProblem::validate).
+HimmelblauControlProblem himmelblau_control_problem(const HimmelblauProblem& pb);
+
 struct HimmelblauEstimate {
   Vec<2> u = Vec<2>::Zero();          ///< sigma grad_x log psi_hat (FD-CRN)
   Vec<2> laplace_u = Vec<2>::Zero();  ///< (z* - x) / (n dt), the Laplace control
   double log_psi = 0.0;               ///< log psi_hat at x
   double ess = 0.0;
-  Vec<2> end = Vec<2>::Zero();  ///< z*(x), warm start for the next step
-  double log_det_L = 0.0;
+  Vec<2> end = Vec<2>::Zero();                         ///< z*(x), warm start for the next step
   MinimizeStatus status = MinimizeStatus::kConverged;  ///< worst over the 5 minimisations
 };
 
 /// One control evaluation at (x, t_k) with M samples (linear map) and FD-CRN in both
-/// coordinates (4 re-minimisations warm-started at z*(x), h = 1e-4 max(1, |x|)).
+/// coordinates: estimate_control on himmelblau_control_problem(pb), with the path minimisation
+/// started on the straight line from x to `warm` (the minimiser over paths with a fixed end is
+/// that line, so a good end point is a good start) and h = 1e-4 max(1, |x|_inf).
+HimmelblauEstimate himmelblau_control(const HimmelblauControlProblem& problem, const Vec<2>& x,
+                                      int k, int M, const Vec<2>& warm, const StreamKey& key);
+/// As above, building the problem from `pb` first.
 HimmelblauEstimate himmelblau_control(const HimmelblauProblem& pb, const Vec<2>& x, int k, int M,
                                       const Vec<2>& warm, const StreamKey& key);
 

@@ -106,6 +106,7 @@ class BlockTridiagonalCholesky {
     const int n = h.num_blocks();
     diag_.resize(static_cast<std::size_t>(n));
     sub_.resize(static_cast<std::size_t>(std::max(n - 1, 0)));
+    inverse_diagonal_.resize(static_cast<std::size_t>(n * B));
     ok_ = n > 0;
     log_det_L_ = 0.0;
     Mat<B> schur;
@@ -118,7 +119,10 @@ class BlockTridiagonalCholesky {
         break;
       }
       diag_[i] = llt.matrixL();
-      for (int k = 0; k < B; ++k) log_det_L_ += std::log(diag_[i](k, k));
+      for (int k = 0; k < B; ++k) {
+        log_det_L_ += std::log(diag_[i](k, k));
+        inverse_diagonal_[static_cast<std::size_t>(i * B + k)] = 1.0 / diag_[i](k, k);
+      }
       if (i + 1 < n) {
         // L(i+1, i) = H(i+1, i) L(i, i)^{-T}  <=>  L(i, i) L(i+1, i)^T = H(i+1, i)^T.
         Mat<B> t = h.subdiagonal[i].transpose();
@@ -147,7 +151,7 @@ class BlockTridiagonalCholesky {
     for (int i = 0; i < n; ++i) {
       Vec<B> r = b.template segment<B>(i * B);
       if (i > 0) r.noalias() -= sub_[i - 1] * b.template segment<B>((i - 1) * B);
-      diag_[i].template triangularView<Eigen::Lower>().solveInPlace(r);
+      forward_substitute(diag_[i], &inverse_diagonal_[static_cast<std::size_t>(i * B)], r);
       b.template segment<B>(i * B) = r;
     }
   }
@@ -160,7 +164,7 @@ class BlockTridiagonalCholesky {
     for (int i = n - 1; i >= 0; --i) {
       Vec<B> r = b.template segment<B>(i * B);
       if (i + 1 < n) r.noalias() -= sub_[i].transpose() * b.template segment<B>((i + 1) * B);
-      diag_[i].transpose().template triangularView<Eigen::Upper>().solveInPlace(r);
+      back_substitute(diag_[i], &inverse_diagonal_[static_cast<std::size_t>(i * B)], r);
       b.template segment<B>(i * B) = r;
     }
   }
@@ -194,8 +198,29 @@ class BlockTridiagonalCholesky {
   const Mat<B>& subdiagonal_block(int i) const { return sub_[static_cast<std::size_t>(i)]; }
 
  private:
+  // The small triangular solves by hand, multiplying by the stored reciprocals of L's diagonal:
+  // the solve is one long dependency chain through the blocks, and it is the inner loop of every
+  // sample, so a division's latency on the chain is what it costs (bench_control).
+  // r <- L^{-1} r for a lower-triangular block L.
+  static void forward_substitute(const Mat<B>& L, const double* inverse_diagonal, Vec<B>& r) {
+    for (int a = 0; a < B; ++a) {
+      double v = r(a);
+      for (int c = 0; c < a; ++c) v -= L(a, c) * r(c);
+      r(a) = v * inverse_diagonal[a];
+    }
+  }
+  // r <- L^{-T} r.
+  static void back_substitute(const Mat<B>& L, const double* inverse_diagonal, Vec<B>& r) {
+    for (int a = B - 1; a >= 0; --a) {
+      double v = r(a);
+      for (int c = a + 1; c < B; ++c) v -= L(c, a) * r(c);
+      r(a) = v * inverse_diagonal[a];
+    }
+  }
+
   std::vector<Mat<B>> diag_;
   std::vector<Mat<B>> sub_;
+  std::vector<double> inverse_diagonal_;  // 1 / L(i, i)(k, k), block by block
   double log_det_L_ = std::numeric_limits<double>::quiet_NaN();
   bool ok_ = false;
 };

@@ -16,8 +16,10 @@
 
 #include <Random123/philox.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -107,6 +109,56 @@ class Rng {
   int pos_ = 4;
   bool has_cached_ = false;
   double cached_ = 0.0;
+};
+
+/// Standard normal vectors drawn in order from one stream and kept, so that after rewind() the
+/// same vectors come again: common random numbers for the central differences of an estimator
+/// (the same references at x and at every x +- h) without paying the Box-Muller transform again,
+/// which dominated a path integral control estimate. Past `max_kept` doubles it keeps nothing
+/// and rewind() restarts the stream instead: the numbers are the same either way.
+class ReplayableNormals {
+ public:
+  explicit ReplayableNormals(const StreamKey& key, std::size_t max_kept = std::size_t{1} << 21)
+      : key_(key), rng_(key), max_kept_(max_kept) {}
+
+  /// Back to the first vector.
+  void rewind() {
+    position_ = 0;
+    if (!keeping_) {
+      rng_ = Rng(key_);
+      drawn_ = 0;
+    }
+  }
+
+  /// The next vector (of xi's size; xi is a vector) in the sequence.
+  template <typename Derived>
+  void next(Eigen::MatrixBase<Derived>& xi) {
+    const auto size = static_cast<std::size_t>(xi.size());
+    if (position_ < drawn_) {  // replay (only while keeping)
+      for (std::size_t i = 0; i < size; ++i)
+        xi(static_cast<Eigen::Index>(i)) = kept_[position_ + i];
+      position_ += size;
+      return;
+    }
+    rng_.fill_normal(xi);
+    position_ += size;
+    drawn_ = position_;
+    if (!keeping_) return;
+    if (kept_.size() + size > max_kept_) {  // too many to keep: forget them, restart on rewind
+      keeping_ = false;
+      kept_ = {};
+      return;
+    }
+    for (std::size_t i = 0; i < size; ++i) kept_.push_back(xi(static_cast<Eigen::Index>(i)));
+  }
+
+ private:
+  StreamKey key_;
+  Rng rng_;
+  std::size_t max_kept_;
+  std::vector<double> kept_;
+  std::size_t position_ = 0, drawn_ = 0;  // in doubles
+  bool keeping_ = true;
 };
 
 }  // namespace implicit
