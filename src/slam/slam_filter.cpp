@@ -199,11 +199,15 @@ std::variant<FastSlam1Proposal, FastSlam2Proposal, ImplicitPoseProposal> pose_pr
       return FastSlam1Proposal{};
     case SlamMethod::kFastSlam2:
       return FastSlam2Proposal{};
-    default:
+    case SlamMethod::kImplicit:
+    case SlamMethod::kImplicitRb:
       return ImplicitPoseProposal{
           o.method == SlamMethod::kImplicit,
           pose_newton_options(o.newton_max_iterations, o.newton_decrement_tolerance)};
+    case SlamMethod::kEkf:
+      break;
   }
+  throw InvalidArgument("SLAM: EKF-SLAM is not a particle method and has no pose proposal");
 }
 
 // Below this map size the linear scan (with its exact range check) is as fast or faster than the

@@ -158,6 +158,11 @@ TEST(PathIntegral, ClosedLoopTakesTheNoiseAsInput) {
   EXPECT_NEAR(r.x.back()(0), x, 1e-7);
   EXPECT_THROW(simulate_closed_loop(problem, Vec<1>(1.0), Eigen::MatrixXd::Zero(1, 3), {}, 1),
                implicit::InvalidArgument);
+  // A warm start for another horizon is an error, not silently replaced by the drift path.
+  EXPECT_THROW(estimate_log_psi_implicit(problem, Vec<1>(1.0), 0, 3, {1}, Eigen::VectorXd(49)),
+               implicit::InvalidArgument);
+  EXPECT_THROW(estimate_control(problem, Vec<1>(1.0), 1, {.samples = 3}, {1}, Eigen::VectorXd(50)),
+               implicit::InvalidArgument);
 }
 
 namespace {

@@ -70,7 +70,8 @@ ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
 }
 
 /// Receding-horizon closed loop: x_{k+1} = x_k + (f + G u_k) dt + G Q sqrt(dt) W_k with the
-/// noise realisation `noise` (D x K, columns W_k ~ N(0, I) mapped through Sigma^{1/2}).
+/// noise realisation `noise` (D x K, columns W_k ~ N(0, I) mapped through Sigma^{1/2}). Each
+/// step's minimisation starts from the previous step's minimiser without its first state.
 template <typename Problem>
 struct ClosedLoopResult {
   std::vector<Vec<Problem::kStateDim>> x;
@@ -92,9 +93,13 @@ ClosedLoopResult<Problem> simulate_closed_loop(const Problem& problem,
   ClosedLoopResult<Problem> r;
   r.x.push_back(x0);
   const double sdt = std::sqrt(problem.dt());
+  Eigen::VectorXd warm;  // the last minimiser without its first state: receding horizon
   for (int k = 0; k < K; ++k) {
-    const auto c =
-        estimate_control(problem, r.x.back(), k, o, {seed, run, static_cast<std::uint64_t>(k), 0});
+    const auto c = estimate_control(problem, r.x.back(), k, o,
+                                    {seed, run, static_cast<std::uint64_t>(k), 0}, warm);
+    const Eigen::Index rest = static_cast<Eigen::Index>(K - k - 1) * D;
+    warm = c.psi.minimizer.size() == rest + D ? Eigen::VectorXd(c.psi.minimizer.tail(rest))
+                                              : Eigen::VectorXd();
     r.u.push_back(c.u);
     r.psi.push_back(c.psi);
     const Vec<D>& x = r.x.back();

@@ -402,6 +402,10 @@ PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem:
     }
   }
   const detail::WallsAhead<Problem> ahead(problem, k);
+  require(warm.size() == 0 || warm.size() == N,
+          "path integral estimator: expected a warm start of {} entries ({} steps of {} states) "
+          "or none, got {}",
+          N, F.num_blocks(), D, warm.size());
   const Eigen::VectorXd start = warm.size() == N ? warm : problem.drift_path(x, k);
   ReplayableNormals own({key.seed, key.step, key.index, purpose::kReference}, 0);
   ReplayableNormals& refs = references ? *references : own;

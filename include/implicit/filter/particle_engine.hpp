@@ -80,7 +80,7 @@ class ParticleEngine {
             "and {}",
             log_weights.size(), ps.size());
     const double total = log_sum_exp(log_weights);
-    require(total > -std::numeric_limits<double>::infinity() && std::isfinite(total),
+    require(std::isfinite(total),
             "particle engine: expected log weights with a finite total, got {}", total);
     particles_.assign(ps.begin(), ps.end());
     resize_weights(ps.size());
