@@ -86,12 +86,14 @@ std::string status_of(const json& results, const std::string& experiment) {
 /// Figure block: the PNG when the script succeeded, otherwise the reason.
 void figure(Document& doc, const json& results, const Text& text, int n,
             const std::string& caption_key) {
+  // Looked up also when the figure is missing, so that a missing caption shows in every run.
+  const std::string caption = text(caption_key);
   const std::string key = fmt::format("figure{}", n);
   const auto& f = get(get(results, "figures"), key);
   const std::string status = f.is_object() ? f.value("status", std::string("not run")) : "not run";
   if (status == "ok") {
-    doc.image(key + ".png", text.format("figure.caption", fmt::arg("n", n),
-                                        fmt::arg("caption", text(caption_key))));
+    doc.image(key + ".png",
+              text.format("figure.caption", fmt::arg("n", n), fmt::arg("caption", caption)));
   } else {
     const std::string reason = f.is_object() && f.contains("error")
                                    ? f.value("error", std::string())
