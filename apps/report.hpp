@@ -4,12 +4,12 @@
 // Everything in the report is derived from one JSON object, the content of DIR/results.json
 // (build, machine, settings, one entry per experiment configuration, figure statuses). So a
 // report can be rebuilt from a results.json alone (`implicit reproduce --report-only`), and a
-// reader can check every number in it.
+// reader can check every number in it. Its words are data too (data/report/text.json, `Text`).
 //
 //   nlohmann::json results = ...;                      // as written by `implicit reproduce`
 //   report::Document doc = report::build_report(results, dir);
 //   write_text(dir / "report.md", doc.markdown());
-//   write_text(dir / "report.html", doc.html("Reproduction report"));
+//   write_text(dir / "report.html", doc.html(doc.title()));
 //
 // The document model is deliberately small (headings, paragraphs, lists, tables, images, code)
 // so that Markdown and self-contained HTML come from the same blocks and cannot disagree.
