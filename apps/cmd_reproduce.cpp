@@ -328,8 +328,7 @@ int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt) {
   write_text(dir / "results.json", results.dump(2) + "\n");
   const auto doc = report::build_report(results, dir);
   write_text(dir / "report.md", doc.markdown());
-  write_text(dir / "report.html",
-             doc.html("Reproduction report: implicit sampling (Morzfeld 2015)"));
+  write_text(dir / "report.html", doc.html(doc.title()));
 
   bool all_ok = true;
   for (const auto& [name, e] : results["experiments"].items())
@@ -387,6 +386,7 @@ int reproduce(RunContext ctx, const ReproduceOptions& opt) {
   results["settings"] = plan.settings;
   results["paper"] = report::paper_numbers();
   results["reference"] = report::reference_numbers();
+  report::report_text();  // a bad text file stops here, not after the runs
   results["experiments"] = run_plan(plan, ctx, opt);
   results["seconds_total"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

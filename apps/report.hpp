@@ -4,12 +4,12 @@
 // Everything in the report is derived from one JSON object, the content of DIR/results.json
 // (build, machine, settings, one entry per experiment configuration, figure statuses). So a
 // report can be rebuilt from a results.json alone (`implicit reproduce --report-only`), and a
-// reader can check every number in it.
+// reader can check every number in it. Its words are data too (data/report/text.json, `Text`).
 //
 //   nlohmann::json results = ...;                      // as written by `implicit reproduce`
 //   report::Document doc = report::build_report(results, dir);
 //   write_text(dir / "report.md", doc.markdown());
-//   write_text(dir / "report.html", doc.html("Reproduction report"));
+//   write_text(dir / "report.html", doc.html(doc.title()));
 //
 // The document model is deliberately small (headings, paragraphs, lists, tables, images, code)
 // so that Markdown and self-contained HTML come from the same blocks and cannot disagree.
@@ -17,9 +17,12 @@
 
 #include <filesystem>
 #include <limits>
+#include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 namespace implicit::app::report {
@@ -53,9 +56,13 @@ class Document {
   /// One self-contained HTML page (inline CSS, no scripts); images are referenced by file name.
   std::string html(const std::string& title) const;
   const std::vector<Block>& blocks() const { return blocks_; }
+  /// The title of the HTML page (`html(doc.title())`).
+  void set_title(std::string title) { title_ = std::move(title); }
+  const std::string& title() const { return title_; }
 
  private:
   std::vector<Block> blocks_;
+  std::string title_;
 };
 
 /// Escapes &, <, >, " for HTML text and attributes.
@@ -105,6 +112,52 @@ nlohmann::json reference_numbers();
 /// Reads one numbers file: a JSON object with a "source" string and every key of `required`.
 nlohmann::json read_numbers_file(const std::filesystem::path& file,
                                  const std::vector<std::string>& required);
+
+// ---- Text -------------------------------------------------------------------------------------
+
+/// The report's prose, <share>/data/report/text.json: a JSON object from a key to a string, or to
+/// an array of strings joined with one space (data/report/README.md). Copies share the record of
+/// the keys looked up, so a test can check that the file and the code use the same keys.
+class Text {
+ public:
+  Text() = default;
+  /// `strings` as read from `file`, which the errors name.
+  Text(nlohmann::json strings, std::filesystem::path file);
+
+  /// The text of `key`; ParseError naming the key and the file when it is missing.
+  std::string operator()(const std::string& key) const;
+  /// The text of `key` with its named placeholders filled: format("k", fmt::arg("runs", 500)).
+  /// ParseError naming the key when fmt cannot format it.
+  template <typename... Args>
+  std::string format(const std::string& key, const Args&... args) const {
+    const std::string pattern = (*this)(key);
+    try {
+      return fmt::format(fmt::runtime(pattern), args...);
+    } catch (const fmt::format_error& e) {
+      bad_placeholder(key, e.what());
+    }
+  }
+  /// The texts of key.1, key.2, ... up to the first missing one (key.1 must exist): a list.
+  std::vector<std::string> items(const std::string& key) const;
+
+  /// Every key of the file.
+  std::vector<std::string> keys() const;
+  /// The keys looked up so far through this text or a copy of it.
+  std::set<std::string> used() const { return used_ ? *used_ : std::set<std::string>(); }
+
+ private:
+  [[noreturn]] void bad_placeholder(const std::string& key, const std::string& what) const;
+
+  std::shared_ptr<const nlohmann::json> strings_;
+  std::filesystem::path file_;
+  std::shared_ptr<std::set<std::string>> used_;
+};
+
+/// Reads a text file: a JSON object whose values are strings or arrays of strings. Throws
+/// InvalidArgument (file missing) or ParseError (not JSON, or another value) naming the file.
+Text read_text_file(const std::filesystem::path& file);
+/// The bundled <share>/data/report/text.json.
+Text report_text();
 
 // ---- The report -------------------------------------------------------------------------------
 

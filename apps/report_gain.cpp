@@ -25,17 +25,13 @@ const json* carpark_run(const json& results, const std::string& config, const st
   });
 }
 
-Table simulated_table(const json& result) {
+Table simulated_table(const json& result, const Text& text) {
   Table t;
-  t.header = {"sweep",
-              "dt [s]",
-              "noise ratio",
-              "ESS/M implicit",
-              "ESS/M bootstrap",
-              "RMSE implicit [m]",
-              "RMSE bootstrap [m]",
-              "CPU implicit [ms]",
-              "CPU bootstrap [ms]"};
+  t.header = {text("gain.col.sweep"),          text("gain.col.dt"),
+              text("gain.col.noise_ratio"),    text("gain.col.ess_implicit"),
+              text("gain.col.ess_bootstrap"),  text("gain.col.rmse_implicit"),
+              text("gain.col.rmse_bootstrap"), text("gain.col.cpu_implicit"),
+              text("gain.col.cpu_bootstrap")};
   for (const auto& p : result.value("points", json::array())) {
     t.rows.push_back({p.value("sweep", std::string()), fmt::format("{:g}", p.value("dt", 0.0)),
                       fmt::format("{:.3g}", p.value("ratio", 0.0)),
@@ -48,10 +44,11 @@ Table simulated_table(const json& result) {
   return t;
 }
 
-Table carpark_table(const json& results, const json& result) {
+Table carpark_table(const json& results, const json& result, const Text& text) {
   Table t;
-  t.header = {"Car Park config", "noise ratio",       "ESS/M implicit",
-              "ESS/M bootstrap", "RMSE implicit [m]", "RMSE bootstrap [m]"};
+  t.header = {text("gain.col.carpark_config"), text("gain.col.noise_ratio"),
+              text("gain.col.ess_implicit"),   text("gain.col.ess_bootstrap"),
+              text("gain.col.rmse_implicit"),  text("gain.col.rmse_bootstrap")};
   for (const std::string config : {"A", "B"}) {
     const json* im = carpark_run(results, config, "implicit");
     const json* bs = carpark_run(results, config, "standard");
@@ -71,28 +68,19 @@ Table carpark_table(const json& results, const json& result) {
 
 }  // namespace
 
-void proposal_gain_section(Document& doc, const json& results, const Numbers& /*numbers*/) {
-  doc.heading(2, "6. Beyond the paper: when does the implicit proposal pay?");
-  experiment_status(doc, results, "proposal_gain");
-  doc.paragraph(
-      "Implicit and bootstrap MCL on simulated unicycle logs (each log filtered by both, with "
-      "the same seed; scans every 0.4 s), against the noise ratio (the per-axis sd of the "
-      "position process noise of one motion step, over the sensor's range sd; the sensor noise "
-      "is scaled) and against the step length dt (sensor fixed). Values are mean ± SE over the "
-      "logs. The Car Park rows reuse the mcl runs with M = 100 above; their ratio uses the "
-      "per-step Ute process noise averaged over the dead-reckoned log and the range sd of "
-      "Table 7.");
+void proposal_gain_section(Document& doc, const json& results, const Numbers& numbers) {
+  const Text& text = numbers.text;
+  doc.heading(2, text("gain.heading"));
+  experiment_status(doc, results, text, "proposal_gain");
+  doc.paragraph(text("gain.intro"));
   const json* run = find_run(results, "proposal_gain", [](const json&) { return true; });
   if (ok(run)) {
     const json& r = run->at("result");
-    doc.table(simulated_table(r));
-    doc.table(carpark_table(results, r));
+    doc.table(simulated_table(r, text));
+    doc.table(carpark_table(results, r, text));
   }
-  figure(doc, results, 8,
-         "ESS/M, position RMSE and CPU time per step of implicit and bootstrap MCL against the "
-         "noise ratio (top, with the Car Park configs A and B as open markers) and the step "
-         "length (bottom); error bars are one SE over runs.");
-  settings_list(doc, results, "proposal_gain");
+  figure(doc, results, text, 8, "gain.figure8");
+  settings_list(doc, results, text, "proposal_gain");
 }
 
 }  // namespace implicit::app::report::parts

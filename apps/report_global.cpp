@@ -28,15 +28,15 @@ std::string number_cell(const json& r, const std::string& key, int digits) {
   return fmt::format("{:.{}f}", v.get<double>(), digits);
 }
 
-Table study_table(const json& results, bool kidnap) {
+Table study_table(const json& results, const Text& text, bool kidnap) {
   Table t;
-  t.header = {"method",
-              "M",
-              "runs",
-              kidnap ? "recovery rate [95 % CI]" : "success rate [95 % CI]",
-              kidnap ? "median time to recover [s]" : "median time to converge [s]",
-              "particles (mean)",
-              "CPU [ms/step]"};
+  t.header = {text("col.method"),
+              text("col.m"),
+              text("col.runs"),
+              text(kidnap ? "global.col.recovery_rate" : "global.col.success_rate"),
+              text(kidnap ? "global.col.time_to_recover" : "global.col.time_to_converge"),
+              text("global.col.particles"),
+              text("global.col.cpu")};
   for (const auto& run : experiment_runs(results, "global_localization")) {
     const auto& s = get(run, "settings");
     if ((s.value("kidnap_at", -1.0) >= 0) != kidnap) continue;
@@ -57,41 +57,26 @@ Table study_table(const json& results, bool kidnap) {
 }
 
 /// The success criteria as the runs state them (the first result that has them).
-std::string criteria(const json& results) {
+std::string criteria(const json& results, const Text& text) {
   for (const auto& run : experiment_runs(results, "global_localization"))
     if (ok(&run) && run.at("result").contains("criteria"))
       return run.at("result").at("criteria").get<std::string>();
-  return "see docs/cli.md";
+  return text("global.criteria_elsewhere");
 }
 
 }  // namespace
 
-void global_localization_section(Document& doc, const json& results, const Numbers& /*numbers*/) {
-  doc.heading(2, "7. Beyond the paper: global localization and kidnapping");
-  experiment_status(doc, results, "global_localization");
-  doc.paragraph(fmt::format(
-      "Implicit and standard (bootstrap) MCL on the Car Park log without the initial pose "
-      "(global start; run r starts r · span / runs seconds into the log) and after a kidnapping "
-      "(the filter starts at the known pose, then a stretch of odometry and scans is dropped, so "
-      "its pose is wrong without being told). Implicit MCL draws its first and its recovery "
-      "particles from the mixture over the minima of −log p(z|x), standard MCL from the uniform "
-      "cloud over the map, with AMCL's recovery rule in both (spec §3.10). The implicit filter "
-      "uses fewer particles than the standard one since each of its particles costs more; "
-      "compare the CPU column. Criteria: {}. The rates' intervals are Wilson 95 % intervals over "
-      "the runs; medians are over the runs that converged (recovered). Figure 9 shows the "
-      "position error of the first runs of the largest M of each method.",
-      criteria(results)));
-  doc.heading(3, "Global start");
-  doc.table(study_table(results, false));
-  doc.heading(3, "Kidnapping");
-  doc.table(study_table(results, true));
-  figure(doc, results, 9,
-         "Position error against time of the first runs of implicit (left) and standard (right) "
-         "MCL from a global start (top) and after a kidnapping (bottom), log scale; the dashed "
-         "line is the 1 m threshold; dotted lines mark where the clock starts (the global start, "
-         "or the "
-         "end of the dropped stretch).");
-  settings_list(doc, results, "global_localization");
+void global_localization_section(Document& doc, const json& results, const Numbers& numbers) {
+  const Text& text = numbers.text;
+  doc.heading(2, text("global.heading"));
+  experiment_status(doc, results, text, "global_localization");
+  doc.paragraph(text.format("global.intro", fmt::arg("criteria", criteria(results, text))));
+  doc.heading(3, text("global.start.heading"));
+  doc.table(study_table(results, text, false));
+  doc.heading(3, text("global.kidnap.heading"));
+  doc.table(study_table(results, text, true));
+  figure(doc, results, text, 9, "global.figure9");
+  settings_list(doc, results, text, "global_localization");
 }
 
 }  // namespace implicit::app::report::parts

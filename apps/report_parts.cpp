@@ -14,7 +14,9 @@ const json& run_count(const json& result) {
 // Always the bundled files, never the copies in results.json: those are provenance, and a copy
 // edited by hand or written by another version may lack keys the tables read (found by
 // fuzz_results_json). The files are validated by read_numbers_file and by the tests.
-Numbers numbers_of(const json&) { return Numbers{paper_numbers(), reference_numbers()}; }
+Numbers numbers_of(const json&) {
+  return Numbers{paper_numbers(), reference_numbers(), report_text()};
+}
 
 /// The first configuration of an experiment whose settings satisfy `pred` (null if none).
 const json* find_run(const json& results, const std::string& experiment, const RunPredicate& pred) {
@@ -82,37 +84,44 @@ std::string status_of(const json& results, const std::string& experiment) {
 }
 
 /// Figure block: the PNG when the script succeeded, otherwise the reason.
-void figure(Document& doc, const json& results, int n, const std::string& caption) {
+void figure(Document& doc, const json& results, const Text& text, int n,
+            const std::string& caption_key) {
+  // Looked up also when the figure is missing, so that a missing caption shows in every run.
+  const std::string caption = text(caption_key);
   const std::string key = fmt::format("figure{}", n);
   const auto& f = get(get(results, "figures"), key);
   const std::string status = f.is_object() ? f.value("status", std::string("not run")) : "not run";
   if (status == "ok") {
-    doc.image(key + ".png", fmt::format("Figure {}. {}", n, caption));
+    doc.image(key + ".png",
+              text.format("figure.caption", fmt::arg("n", n), fmt::arg("caption", caption)));
   } else {
-    doc.paragraph(fmt::format("**Figure {} {}**: {}", n,
-                              status == "skipped" ? "skipped" : "missing",
-                              f.is_object() ? f.value("error", std::string("not produced"))
-                                            : std::string("not produced")));
+    const std::string reason = f.is_object() && f.contains("error")
+                                   ? f.value("error", std::string())
+                                   : text("figure.not_produced");
+    doc.paragraph(text.format(status == "skipped" ? "figure.skipped" : "figure.missing",
+                              fmt::arg("n", n), fmt::arg("reason", reason)));
   }
 }
 
-void settings_list(Document& doc, const json& results, const std::string& experiment) {
+void settings_list(Document& doc, const json& results, const Text& text,
+                   const std::string& experiment) {
   const auto& s = get(get(results, "settings"), experiment);
   if (!s.is_object()) return;
   std::vector<std::string> items;
   for (const auto& [k, v] : s.items()) items.push_back(fmt::format("`{}`: {}", k, v.dump()));
-  doc.paragraph("Settings used in this run:");
+  doc.paragraph(text("settings.intro"));
   doc.list(items);
 }
 
 namespace {
 
-std::string failures_note(const json& results, const std::string& experiment) {
+std::string failures_note(const json& results, const Text& text, const std::string& experiment) {
   std::string note;
   for (const auto& run : experiment_runs(results, experiment))
     if (run.value("status", std::string()) != "ok") {
-      note = fmt::format("{} failed: {}", run.value("label", experiment),
-                         run.value("error", std::string("unknown error")));
+      note = text.format("status.run_failed", fmt::arg("label", run.value("label", experiment)),
+                         fmt::arg("error", run.contains("error") ? run.value("error", std::string())
+                                                                 : text("status.unknown_error")));
       break;
     }
   return note;
@@ -120,13 +129,14 @@ std::string failures_note(const json& results, const std::string& experiment) {
 
 }  // namespace
 
-void experiment_status(Document& doc, const json& results, const std::string& experiment) {
+void experiment_status(Document& doc, const json& results, const Text& text,
+                       const std::string& experiment) {
   const std::string s = status_of(results, experiment);
   if (s == "ok") return;
-  std::string text = fmt::format("**Status: {}.**", s);
-  const std::string f = failures_note(results, experiment);
-  if (!f.empty()) text += " First failure — " + f;
-  doc.paragraph(text);
+  const std::string f = failures_note(results, text, experiment);
+  doc.paragraph(f.empty() ? text.format("status.line", fmt::arg("status", s))
+                          : text.format("status.line_with_failure", fmt::arg("status", s),
+                                        fmt::arg("failure", f)));
 }
 
 std::string mean_se_cell(const json* run, const std::string& key, const std::string& sd_key,
@@ -165,16 +175,8 @@ Estimate fraction_estimate(const json& p, const json& n) {
   return e;
 }
 
-std::string agreement_statement() {
-  return fmt::format(
-      "**Agreement test.** Every mean over runs is shown with its standard error SE = sd/√runs "
-      "(data sets for SLAM). A column **agree** compares ours with the reference: ✓ when "
-      "|ours − reference| ≤ {} √(SE_ours² + SE_ref²), the reference's SE from its sd and its "
-      "number of runs; ✗ otherwise; – when it cannot be computed (one run, or a value given "
-      "without sd). A fraction p of n runs has SE √(p(1 − p)/n); a closed form has SE 0. At "
-      "{} combined SE a true agreement fails with probability 7·10⁻⁶, so a ✗ is a real "
-      "difference, not bad luck.",
-      kAgreementSigmas, kAgreementSigmas);
+std::string agreement_statement(const Text& text) {
+  return text.format("intro.agreement", fmt::arg("sigmas", kAgreementSigmas));
 }
 
 }  // namespace implicit::app::report::parts

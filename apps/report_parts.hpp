@@ -15,14 +15,18 @@ namespace implicit::app::report::parts {
 using nlohmann::json;
 using RunPredicate = std::function<bool(const json& settings)>;
 
-/// The paper's and the reference's numbers the report compares with: always the bundled data
-/// files (data/report/), also for a report rebuilt from an older results.json, whose copies
-/// under "paper" and "reference" are kept for provenance only.
+/// The paper's and the reference's numbers the report compares with, and its text: always the
+/// bundled data files (data/report/), also for a report rebuilt from an older results.json,
+/// whose copies under "paper" and "reference" are kept for provenance only.
 struct Numbers {
   json paper;
   json reference;
+  Text text;
 };
 Numbers numbers_of(const json& results);
+/// build_report with the numbers and text given (a test records the text keys it looks up).
+Document build_report_with(const json& results, const std::filesystem::path& dir,
+                           const Numbers& numbers);
 
 /// The first configuration of an experiment whose settings satisfy `pred` (null if none).
 const json* find_run(const json& results, const std::string& experiment, const RunPredicate& pred);
@@ -58,15 +62,19 @@ Estimate reference_estimate(const json& mean, const json& sd, const json& n);
 /// A fraction p of n trials: SE √(p(1 − p)/n).
 Estimate fraction_estimate(const json& p, const json& n);
 /// The test as the report states it once, in its introduction.
-std::string agreement_statement();
+std::string agreement_statement(const Text& text);
 
 // ---- Blocks -------------------------------------------------------------------------------------
 
 std::string status_of(const json& results, const std::string& experiment);
-/// Figure block: the PNG when the script succeeded, otherwise the reason.
-void figure(Document& doc, const json& results, int n, const std::string& caption);
-void settings_list(Document& doc, const json& results, const std::string& experiment);
-void experiment_status(Document& doc, const json& results, const std::string& experiment);
+/// Figure block: the PNG when the script succeeded, otherwise the reason; its caption is the
+/// text `caption_key`.
+void figure(Document& doc, const json& results, const Text& text, int n,
+            const std::string& caption_key);
+void settings_list(Document& doc, const json& results, const Text& text,
+                   const std::string& experiment);
+void experiment_status(Document& doc, const json& results, const Text& text,
+                       const std::string& experiment);
 
 // ---- Sections -----------------------------------------------------------------------------------
 
