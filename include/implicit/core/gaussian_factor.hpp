@@ -178,7 +178,20 @@ class LowerFactorView {
   LowerFactorView(const Mat<N>& L, double log_det_L) : L_(L), log_det_L_(log_det_L) {}
   double log_det_L() const { return log_det_L_; }
   void upper_solve_in_place(Vector& v) const {
-    L_.transpose().template triangularView<Eigen::Upper>().solveInPlace(v);
+    if constexpr (N != Eigen::Dynamic && N <= 8) {
+      // By hand for small fixed sizes: Eigen's triangular solve costs more than the rest of a
+      // linear-map sample at N = 3 and 5 (bench_core BM_LinearMapSample).
+      // The reciprocals do not depend on v: their divisions overlap instead of lying on the
+      // solve's dependency chain.
+      for (int a = N - 1; a >= 0; --a) {
+        const double inverse = 1.0 / L_(a, a);
+        double r = v(a);
+        for (int c = a + 1; c < N; ++c) r -= L_(c, a) * v(c);
+        v(a) = r * inverse;
+      }
+    } else {
+      L_.transpose().template triangularView<Eigen::Upper>().solveInPlace(v);
+    }
   }
   void solve_in_place(Vector& v) const {
     L_.template triangularView<Eigen::Lower>().solveInPlace(v);

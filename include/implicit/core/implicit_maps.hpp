@@ -57,9 +57,11 @@ struct RandomMapOptions {
 template <GaussianFactor Factor, typename F, typename XiDerived>
 double linear_map(const F& f, const typename Factor::Vector& mu, const Factor& factor,
                   const Eigen::MatrixBase<XiDerived>& xi, typename Factor::Vector& x) {
-  x = xi;
-  factor.upper_solve_in_place(x);
-  x += mu;
+  // Solved in a local, then added: in place in x, the solve's scalar stores stall the vector
+  // loads of `x += mu` (store forwarding; 1.2x the cost at m = 5 in bench_core).
+  typename Factor::Vector offset = xi;
+  factor.upper_solve_in_place(offset);
+  x = mu + offset;
   return implicit_log_weight(static_cast<int>(mu.size()), xi.squaredNorm(),
                              f.evaluate(x, nullptr, nullptr), factor.log_det_L());
 }
