@@ -16,7 +16,6 @@
 
 #include <Random123/philox.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
