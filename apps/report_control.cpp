@@ -131,10 +131,10 @@ void arm_section(Document& doc, const json& results, const Numbers& numbers) {
   t.rows.push_back(
       {text("arm.row.theta_wrong_model"), "–", pair(ref, "theta_final_wrong_model", 6),
        cell(run, [&](const json& r) { return pair(r, "final_state_wrong_model", 6); })});
-  t.rows.push_back({text("arm.row.torque_exact"), "–", text("arm.row.torque_exact.reference"),
+  t.rows.push_back({text("arm.row.torque_exact"), "–", pair(ref, "initial_torque_exact", 6),
                     cell(run, [&](const json& r) { return pair(r, "initial_torque_exact", 6); })});
   t.rows.push_back(
-      {text("arm.row.torque_wrong_model"), "–", text("arm.row.torque_wrong_model.reference"),
+      {text("arm.row.torque_wrong_model"), "–", pair(ref, "initial_torque_wrong_model", 6),
        cell(run, [&](const json& r) { return pair(r, "initial_torque_wrong_model", 6); })});
   // One noise-free run on both sides: no standard error, so the test cannot be computed and
   // the digits are compared instead.
@@ -224,14 +224,16 @@ Table himmelblau_table(const json* run, const json* many, const json& paper, con
                     "–", value_cell(run, "newton_final_f", 4), "–", "–"});
   t.rows.push_back({text("himmelblau.row.runs"), std::to_string(paper["runs_total"].get<int>()),
                     number(ref["mean_cost_runs"], 0), "–", int_cell(run, "runs"), "–", "–"});
-  t.rows.push_back({text("himmelblau.row.below_10"), text("himmelblau.row.below_10.paper"),
+  t.rows.push_back({text("himmelblau.row.below_10"),
+                    text.format("himmelblau.row.below_10.paper",
+                                fmt::arg("value", number(paper["runs_below_10"], 0))),
                     text("himmelblau.row.below_10.reference"), "–", int_cell(run, "runs_below_10"),
                     "–", "–"});
   t.rows.push_back(
       cost_row(run, text("himmelblau.row.cost"), "≈ " + number(paper["mean_cost"], 2)));
   t.rows.push_back({text("himmelblau.row.f_x19"), text("himmelblau.row.f_x19.paper"),
                     text.format("himmelblau.row.f_x19.reference",
-                                fmt::arg("value", number(ref["mean_f_x19"], 2))),
+                                fmt::arg("value", pm(ref["mean_f_x19"], ref["mean_f_x19_se"], 2))),
                     expected(run, "f_before_last_step", 4),
                     mean_se(run, "mean_f_before_last_step", 3), "–",
                     agreement(himmelblau_estimate(run, "mean_f_before_last_step"),
