@@ -41,8 +41,8 @@ void setup_arm(CLI::App& sub) {
   });
 }
 
-const Registrar reg{"arm", "Robot arm: path integral control = LQR, exact vs wrong model",
-                    setup_arm};
+const Registrar register_arm{"arm", "Robot arm: path integral control = LQR, exact vs wrong model",
+                             setup_arm};
 
 }  // namespace
 }  // namespace implicit::app

@@ -60,8 +60,8 @@ void setup_himmelblau(CLI::App& sub) {
   });
 }
 
-const Registrar reg{"himmelblau", "Himmelblau's function minimised by stochastic control",
-                    setup_himmelblau};
+const Registrar register_himmelblau{
+    "himmelblau", "Himmelblau's function minimised by stochastic control", setup_himmelblau};
 
 }  // namespace
 }  // namespace implicit::app

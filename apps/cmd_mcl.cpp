@@ -192,8 +192,8 @@ void setup_mcl(CLI::App& sub) {
   });
 }
 
-const Registrar reg{"mcl", "Monte Carlo localization on the Car Park data (paper Table 5)",
-                    setup_mcl};
+const Registrar register_mcl{"mcl", "Monte Carlo localization on the Car Park data (paper Table 5)",
+                             setup_mcl};
 
 }  // namespace
 }  // namespace implicit::app

@@ -81,9 +81,9 @@ void setup_proposal_gain(CLI::App& sub) {
   });
 }
 
-const Registrar reg{"proposal-gain",
-                    "When implicit MCL beats bootstrap MCL: noise ratio and step length sweeps",
-                    setup_proposal_gain};
+const Registrar register_proposal_gain{
+    "proposal-gain", "When implicit MCL beats bootstrap MCL: noise ratio and step length sweeps",
+    setup_proposal_gain};
 
 }  // namespace
 }  // namespace implicit::app

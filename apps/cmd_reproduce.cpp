@@ -393,7 +393,7 @@ int reproduce(RunContext ctx, const ReproduceOptions& opt) {
   return finish(results, ctx, opt);
 }
 
-Registrar reg{
+Registrar register_reproduce{
     "reproduce",
     "Every table and figure of the paper, side by side with ours: DIR/report.html, report.md, "
     "results.json",

@@ -105,8 +105,8 @@ void setup_simulate(CLI::App& sub) {
   });
 }
 
-const Registrar reg{"simulate", "A synthetic robot log (ute or unicycle) for mcl and slam",
-                    setup_simulate};
+const Registrar register_simulate{
+    "simulate", "A synthetic robot log (ute or unicycle) for mcl and slam", setup_simulate};
 
 }  // namespace
 }  // namespace implicit::app

@@ -125,8 +125,8 @@ void setup_slam(CLI::App& sub) {
   });
 }
 
-const Registrar reg{"slam", "Landmark SLAM: EKF, FastSLAM 1.0/2.0, implicit (paper Table 6)",
-                    setup_slam};
+const Registrar register_slam{
+    "slam", "Landmark SLAM: EKF, FastSLAM 1.0/2.0, implicit (paper Table 6)", setup_slam};
 
 }  // namespace
 }  // namespace implicit::app

@@ -70,8 +70,8 @@ void setup_slit(CLI::App& sub) {
   });
 }
 
-const Registrar reg{"slit", "Double slit: path integral control through a wall (paper Table 2)",
-                    setup_slit};
+const Registrar register_slit{
+    "slit", "Double slit: path integral control through a wall (paper Table 2)", setup_slit};
 
 }  // namespace
 }  // namespace implicit::app

@@ -26,6 +26,12 @@ inline std::string read_file(const std::filesystem::path& file) {
   return ss.str();
 }
 
+/// Writes `text` to `file`, creating its folder.
+inline void write_file(const std::filesystem::path& file, const std::string& text) {
+  std::filesystem::create_directories(file.parent_path());
+  std::ofstream(file) << text;
+}
+
 /// A fresh folder under the system temp dir; removed when the test passed, kept otherwise.
 class TempDir {
  public:

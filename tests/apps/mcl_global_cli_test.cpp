@@ -14,7 +14,7 @@ namespace {
 
 using nlohmann::json;
 
-json run_json(const std::string& args) {
+json mcl_json(const std::string& args) {
   const auto r = run_cli("mcl " + args + " --json --threads 1");
   EXPECT_EQ(r.code, 0) << r.err;
   return r.code == 0 ? json::parse(r.out) : json::object();
@@ -47,7 +47,7 @@ void check_time(const json& j, const std::string& key) {
 TEST(MclGlobalCli, GlobalStartReportsRatesTimesAndParticles) {
   // The first 45 s of the log: enough for both starts, and cheap under the sanitizers.
   const json j =
-      run_json("--init global --method implicit -M 50 --runs 2 --duration 45 --start-span 5");
+      mcl_json("--init global --method implicit -M 50 --runs 2 --duration 45 --start-span 5");
   ASSERT_FALSE(j.empty());
   EXPECT_EQ(j["init"], "global");
   EXPECT_EQ(j["source"], "mixture");  // implicit: the mixture over the minima
@@ -63,7 +63,7 @@ TEST(MclGlobalCli, GlobalStartReportsRatesTimesAndParticles) {
 }
 
 TEST(MclGlobalCli, KldKeepsTheParticleCountWithinItsBounds) {
-  const json j = run_json(
+  const json j = mcl_json(
       "--init global --method implicit -M 50 --runs 2 --duration 45 --start-span 5 --kld "
       "--min-particles 20 --max-particles 300");
   ASSERT_FALSE(j.empty());
@@ -75,7 +75,7 @@ TEST(MclGlobalCli, KldKeepsTheParticleCountWithinItsBounds) {
 }
 
 TEST(MclGlobalCli, KidnappingReportsRecovery) {
-  const json j = run_json("--kidnap-at 60 --kidnap-skip 10 --method standard -M 100 --runs 2");
+  const json j = mcl_json("--kidnap-at 60 --kidnap-skip 10 --method standard -M 100 --runs 2");
   ASSERT_FALSE(j.empty());
   EXPECT_EQ(j["init"], "known");
   EXPECT_EQ(j["kidnap_at_s"].get<double>(), 60.0);

@@ -18,7 +18,7 @@ using nlohmann::json;
 const std::string kTiny =
     "proposal-gain --runs 3 --duration 8 --ratios 0.1,10 --dts 0.2 --seed 5 --json --quiet";
 
-json run_json(const std::string& args) {
+json gain_json(const std::string& args) {
   const auto r = run_cli(args);
   EXPECT_EQ(r.code, 0) << r.err;
   return json::parse(r.out);
@@ -37,7 +37,7 @@ json without_timing(json j) {
 }
 
 TEST(ProposalGain, TinyRunHasTheDocumentedFields) {
-  const json j = run_json(kTiny);
+  const json j = gain_json(kTiny);
   for (const char* key : {"particles", "runs", "duration_s", "scan_period_s", "seed", "points",
                           "carpark_ratio", "seconds"})
     EXPECT_TRUE(j.contains(key)) << key;
@@ -59,8 +59,8 @@ TEST(ProposalGain, TinyRunHasTheDocumentedFields) {
 }
 
 TEST(ProposalGain, SameSeedSameJsonForOneAndTwoThreads) {
-  EXPECT_EQ(without_timing(run_json(kTiny + " --threads 1")),
-            without_timing(run_json(kTiny + " --threads 2")));
+  EXPECT_EQ(without_timing(gain_json(kTiny + " --threads 1")),
+            without_timing(gain_json(kTiny + " --threads 2")));
 }
 
 // At a noise ratio of 10 the bootstrap proposal puts almost no particle where the sensor says,
@@ -70,7 +70,7 @@ TEST(ProposalGain, SameSeedSameJsonForOneAndTwoThreads) {
 // The bootstrap ESS/M must also fall from ratio 0.1 to 10 by more than 4.5 SEs of the
 // difference of the two independent means.
 TEST(ProposalGain, ImplicitGainsEssAtALargeNoiseRatio) {
-  const json j = run_json(
+  const json j = gain_json(
       "proposal-gain --runs 8 --duration 16 --ratios 0.1,10 --dts 0.1 --seed 11 --json "
       "--quiet");
   const auto& low = j["points"][0];

@@ -22,6 +22,7 @@ namespace {
 namespace report = implicit::app::report;
 using implicit::test::run_cli;
 using implicit::test::TempDir;
+using implicit::test::write_file;
 using nlohmann::json;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -96,11 +97,6 @@ TEST(ReportStandardError, SpreadShowsTheStandardErrorOfTheMean) {
 
 // ---- Numbers files ------------------------------------------------------------------------------
 
-void write(const std::filesystem::path& file, const std::string& text) {
-  std::filesystem::create_directories(file.parent_path());
-  std::ofstream(file) << text;
-}
-
 std::string message_of(const std::filesystem::path& file) {
   try {
     report::read_numbers_file(file, {"table2"});
@@ -124,11 +120,11 @@ TEST(ReportNumbersFile, MalformedFilesAreErrorsNamingTheFile) {
                                  "{\"source\": 3, \"table2\": {}}", "{\"source\": \"x\"}",
                                  "{\"source\": \"x\", \"table2\": 1}"}) {
     SCOPED_TRACE(text);
-    write(file, text);
+    write_file(file, text);
     EXPECT_THROW(report::read_numbers_file(file, {"table2"}), implicit::ParseError);
     EXPECT_NE(message_of(file).find(file.string()), std::string::npos) << message_of(file);
   }
-  write(file, "{\"source\": \"x\", \"table2\": {\"runs\": 500}}");
+  write_file(file, "{\"source\": \"x\", \"table2\": {\"runs\": 500}}");
   EXPECT_EQ(report::read_numbers_file(file, {"table2"})["table2"]["runs"], 500);
 }
 
@@ -144,7 +140,7 @@ TEST(ReportNumbersFile, TheInstalledFilesHaveEveryTableTheReportReads) {
 
 TEST(ReportNumbersFile, ReproduceStopsWithTheFileNameWhenANumbersFileIsBad) {
   TempDir dir("report_numbers_cli");
-  write(dir.path() / "data" / "report" / "paper.json", "{\"source\": \"x\", \"table2\": ");
+  write_file(dir.path() / "data" / "report" / "paper.json", "{\"source\": \"x\", \"table2\": ");
   setenv("IMPLICIT_DATA_DIR", (dir.path() / "data").c_str(), 1);
   const auto r = run_cli("reproduce --quick --only arm --no-figures --quiet --out '" +
                          (dir.path() / "out").string() + "'");

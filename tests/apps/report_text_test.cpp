@@ -26,12 +26,8 @@ namespace report = implicit::app::report;
 using implicit::test::read_file;
 using implicit::test::run_cli;
 using implicit::test::TempDir;
+using implicit::test::write_file;
 using nlohmann::json;
-
-void write(const std::filesystem::path& file, const std::string& text) {
-  std::filesystem::create_directories(file.parent_path());
-  std::ofstream(file) << text;
-}
 
 json corpus_results() {
   return json::parse(read_file(std::filesystem::path(IMPLICIT_SOURCE_DIR) /
@@ -73,9 +69,9 @@ TEST(ReportText, TheFileHasExactlyTheKeysTheReportLooksUp) {
   const report::parts::Numbers numbers{report::paper_numbers(), report::reference_numbers(), text};
   const json results = corpus_results();
   report::parts::build_report_with(results, dir.path(), numbers);
-  write(dir.path() / "table4_himmelblau.csv", "k,newton\n0,1.5\n");
+  write_file(dir.path() / "table4_himmelblau.csv", "k,newton\n0,1.5\n");
   report::parts::build_report_with(variant(results), dir.path(), numbers);
-  write(dir.path() / "table4_himmelblau.csv", "k,newton\n0\n");  // a row too short
+  write_file(dir.path() / "table4_himmelblau.csv", "k,newton\n0\n");  // a row too short
   report::parts::build_report_with(variant(results), dir.path(), numbers);
 
   const std::set<std::string> used = text.used();
@@ -93,7 +89,7 @@ TEST(ReportText, TheFileHasExactlyTheKeysTheReportLooksUp) {
 TEST(ReportText, AnArrayIsJoinedWithOneSpaceAndListsAreNumberedKeys) {
   TempDir dir("report_text_join");
   const auto file = dir.path() / "text.json";
-  write(file, R"({"p": ["One.", "Two {n}."], "l.1": "a", "l.2": ["b", "c"], "l.4": "d"})");
+  write_file(file, R"({"p": ["One.", "Two {n}."], "l.1": "a", "l.2": ["b", "c"], "l.4": "d"})");
   const report::Text text = report::read_text_file(file);
   EXPECT_EQ(text("p"), "One. Two {n}.");
   EXPECT_EQ(text.format("p", fmt::arg("n", 2)), "One. Two 2.");
@@ -116,12 +112,12 @@ TEST(ReportText, MalformedFilesAreErrorsNamingTheFile) {
   for (const std::string text : {"{\"a\": \"x\"", "[\"a\"]", "{\"a\": 1}", "{\"a\": []}",
                                  "{\"a\": [\"x\", 2]}", "{\"a\": {\"b\": \"x\"}}"}) {
     SCOPED_TRACE(text);
-    write(file, text);
+    write_file(file, text);
     EXPECT_THROW(report::read_text_file(file), implicit::ParseError);
     const std::string m = message_of([&] { report::read_text_file(file); });
     EXPECT_NE(m.find(file.string()), std::string::npos) << m;
   }
-  write(file, "{\"a\": \"x\"");
+  write_file(file, "{\"a\": \"x\"");
   EXPECT_NE(message_of([&] { report::read_text_file(file); }).find("not valid JSON"),
             std::string::npos);
 }
@@ -129,7 +125,7 @@ TEST(ReportText, MalformedFilesAreErrorsNamingTheFile) {
 TEST(ReportText, AMissingKeyIsAnErrorNamingTheKeyAndTheFile) {
   TempDir dir("report_text_key");
   const auto file = dir.path() / "text.json";
-  write(file, R"({"a": "x"})");
+  write_file(file, R"({"a": "x"})");
   const report::Text text = report::read_text_file(file);
   EXPECT_THROW(text("slit.heading"), implicit::ParseError);
   for (const std::string& m :
@@ -143,7 +139,7 @@ TEST(ReportText, AMissingKeyIsAnErrorNamingTheKeyAndTheFile) {
 TEST(ReportText, ATextThatCannotBeFormattedIsAnErrorNamingTheKey) {
   TempDir dir("report_text_format");
   const auto file = dir.path() / "text.json";
-  write(file, R"({"open": "runs {n", "unknown": "runs {m}", "spec": "{n:.2q}"})");
+  write_file(file, R"({"open": "runs {n", "unknown": "runs {m}", "spec": "{n:.2q}"})");
   const report::Text text = report::read_text_file(file);
   for (const std::string key : {"open", "unknown", "spec"}) {
     SCOPED_TRACE(key);
@@ -159,7 +155,7 @@ TEST(ReportText, AReportWithAKeyMissingStopsNamingTheKey) {
       read_file(std::filesystem::path(IMPLICIT_SOURCE_DIR) / "data" / "report" / "text.json"));
   strings.erase("mcl.heading");
   const auto file = dir.path() / "text.json";
-  write(file, strings.dump());
+  write_file(file, strings.dump());
   const report::parts::Numbers numbers{report::paper_numbers(), report::reference_numbers(),
                                        report::read_text_file(file)};
   EXPECT_THROW(report::parts::build_report_with(corpus_results(), dir.path(), numbers),
@@ -177,7 +173,7 @@ TEST(ReportText, ReproduceStopsBeforeTheRunsWhenTheTextFileIsBad) {
   std::filesystem::create_directories(data);
   for (const char* name : {"paper.json", "reference.json"})
     std::filesystem::copy_file(source / name, data / name);
-  write(data / "text.json", "{\"report.heading\": ");
+  write_file(data / "text.json", "{\"report.heading\": ");
   setenv("IMPLICIT_DATA_DIR", (dir.path() / "data").c_str(), 1);
   const auto r = run_cli("reproduce --quick --only arm --no-figures --quiet --out '" +
                          (dir.path() / "out").string() + "'");

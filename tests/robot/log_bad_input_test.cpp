@@ -14,14 +14,14 @@
 namespace implicit::robot {
 namespace {
 
-RobotLog parse(const std::string& text) {
+RobotLog parse_bad_log(const std::string& text) {
   std::istringstream in(text);
   return parse_robot_log(in, "bad.log");
 }
 
 std::string runnable_error(const std::string& text) {
   try {
-    require_runnable(parse(text));
+    require_runnable(parse_bad_log(text));
   } catch (const ParseError& e) {
     return e.what();
   }
@@ -45,14 +45,15 @@ TEST(LogFormat, ControlsAllBeforeInitialIsAnErrorNamingTheLine) {
 }
 
 TEST(LogFormat, ScanBeforeTheFirstStepIsSkipped) {
-  const RobotLog log = parse("initial 0 0 0 0 0 0 0\nscan 0.1 0\ncontrol 1 1 0\nscan 1 0\n");
+  const RobotLog log =
+      parse_bad_log("initial 0 0 0 0 0 0 0\nscan 0.1 0\ncontrol 1 1 0\nscan 1 0\n");
   const StepSchedule s = make_schedule(log, 0.0, 0.05);
   ASSERT_EQ(s.steps.size(), 1u);
   EXPECT_EQ(s.scans_skipped, 1);  // 0.9 s from the only step
   EXPECT_EQ(s.scans_used, 1);
   EXPECT_EQ(s.steps[0].scan, 1);
   // No step at all: every scan is skipped.
-  const StepSchedule none = make_schedule(parse("scan 0.5 0\nscan 0.7 0\n"), 1.0, 0.05);
+  const StepSchedule none = make_schedule(parse_bad_log("scan 0.5 0\nscan 0.7 0\n"), 1.0, 0.05);
   EXPECT_TRUE(none.steps.empty());
   EXPECT_EQ(none.scans_skipped, 2);
 }
@@ -60,13 +61,13 @@ TEST(LogFormat, ScanBeforeTheFirstStepIsSkipped) {
 TEST(LogFormat, ControlBytesInAFileAreEscapedInTheMessage) {
   std::string message;
   try {
-    parse(std::string("landmark 1 2\x1b[31m 3\n"));
+    parse_bad_log(std::string("landmark 1 2\x1b[31m 3\n"));
   } catch (const ParseError& e) {
     message = e.what();
   }
   EXPECT_EQ(message, "bad.log:1: field 'x': expected a finite number, got '2\\x1b[31m'");
   try {
-    parse("cont\x01rol\x7f 1 2 3\n");
+    parse_bad_log("cont\x01rol\x7f 1 2 3\n");
   } catch (const ParseError& e) {
     message = e.what();
   }
@@ -78,11 +79,11 @@ TEST(LogFormat, ControlBytesInAFileAreEscapedInTheMessage) {
 TEST(LogFormat, ManyLandmarkIdsAreLookedUpByHash) {
   std::string text;
   for (int id = 0; id < 20000; ++id) text += "landmark " + std::to_string(3 * id + 1) + " 1 2\n";
-  const RobotLog log = parse(text);
+  const RobotLog log = parse_bad_log(text);
   ASSERT_EQ(log.landmarks.size(), 20000u);
   for (int id : {1, 4, 30001, 59998}) EXPECT_EQ(log.landmarks.index_of(id), (id - 1) / 3) << id;
   for (int id : {0, 2, 59999, 60001}) EXPECT_EQ(log.landmarks.index_of(id), -1) << id;
-  EXPECT_THROW(parse(text + "landmark 4 0 0\n"), ParseError);
+  EXPECT_THROW(parse_bad_log(text + "landmark 4 0 0\n"), ParseError);
 }
 
 TEST(TextInput, AnEndlessFileIsRefusedAtTheSizeBound) {

@@ -9,22 +9,21 @@
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/ekf_slam.hpp"
 #include "implicit/slam/slam_filter.hpp"
+#include "slam/test_data.hpp"
 
 namespace implicit::slam {
 namespace {
-
-std::filesystem::path data_dir() { return std::filesystem::path(IMPLICIT_SOURCE_DIR) / "data"; }
 
 // data/slam-synthetic/README.md: the reference EKF-SLAM (known association, Joseph form,
 // augmentation at first sighting, zero initial pose covariance, Sigma1 with P = 0.5) on
 // paper_le1_seed1. The same deterministic algorithm must agree to round-off accumulated over
 // 5000 steps; 1e-6 m is the README's figure.
 TEST(EkfSlam, MatchesReferenceTraceOnPaperSeed1) {
-  const auto sc = load_carpark_scenario(data_dir());
-  const auto data =
-      read_reference_csv(data_dir() / "slam-synthetic" / "paper_le1_seed1.csv.gz", sc.landmarks);
+  const auto sc = load_carpark_scenario(repository_data_dir());
+  const auto data = read_reference_csv(
+      repository_data_dir() / "slam-synthetic" / "paper_le1_seed1.csv.gz", sc.landmarks);
   const auto ref =
-      read_reference_trace(data_dir() / "slam-synthetic" / "ekf_paper_le1_seed1.csv.gz");
+      read_reference_trace(repository_data_dir() / "slam-synthetic" / "ekf_paper_le1_seed1.csv.gz");
   ASSERT_EQ(ref.size(), data.steps() + 1);
   SlamOptions opt;
   opt.method = SlamMethod::kEkf;
@@ -43,11 +42,11 @@ TEST(EkfSlam, MatchesReferenceTraceOnPaperSeed1) {
 }
 
 TEST(SyntheticData, PaperTruthReproducesReferenceFiles) {
-  const auto sc = load_carpark_scenario(data_dir());
+  const auto sc = load_carpark_scenario(repository_data_dir());
   ASSERT_EQ(sc.controls.size(), 5000u);
   ASSERT_EQ(sc.landmarks.size(), 15u);
-  const auto ref =
-      read_reference_csv(data_dir() / "slam-synthetic" / "paper_le1_seed1.csv.gz", sc.landmarks);
+  const auto ref = read_reference_csv(
+      repository_data_dir() / "slam-synthetic" / "paper_le1_seed1.csv.gz", sc.landmarks);
   SyntheticConfig cfg;
   const auto d = generate_synthetic(sc, cfg, 7);
   ASSERT_EQ(d.truth.size(), ref.truth.size());
@@ -72,7 +71,7 @@ TEST(SyntheticData, PaperTruthReproducesReferenceFiles) {
 }
 
 TEST(SyntheticData, LaserEveryKthStepAndDeterminism) {
-  const auto sc = load_carpark_scenario(data_dir());
+  const auto sc = load_carpark_scenario(repository_data_dir());
   SyntheticConfig cfg;
   cfg.laser_every = 8;
   const auto a = generate_synthetic(sc, cfg, 3);

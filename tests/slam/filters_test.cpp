@@ -16,15 +16,14 @@
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/evaluate.hpp"
 #include "implicit/slam/slam_filter.hpp"
+#include "slam/test_data.hpp"
 
 namespace implicit::slam {
 namespace {
 
-std::filesystem::path data_dir() { return std::filesystem::path(IMPLICIT_SOURCE_DIR) / "data"; }
-
 // The first `steps` steps of a synthetic paper-like data set.
 SlamDataset short_data(std::size_t steps, std::uint64_t seed, int laser_every = 1) {
-  SlamScenario sc = load_carpark_scenario(data_dir());
+  SlamScenario sc = load_carpark_scenario(repository_data_dir());
   sc.controls.resize(steps);
   SyntheticConfig cfg;
   cfg.laser_every = laser_every;

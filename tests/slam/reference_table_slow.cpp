@@ -22,11 +22,10 @@
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/evaluate.hpp"
 #include "implicit/slam/slam_filter.hpp"
+#include "slam/test_data.hpp"
 
 namespace implicit::slam {
 namespace {
-
-std::filesystem::path data_dir() { return std::filesystem::path(IMPLICIT_SOURCE_DIR) / "data"; }
 
 struct Row {
   SlamMethod method;
@@ -45,7 +44,7 @@ SlamOptions options_m100(SlamMethod method, std::uint64_t seed) {
 }
 
 void check_against_table(const Row& row, std::size_t datasets) {
-  const SlamScenario sc = load_carpark_scenario(data_dir());
+  const SlamScenario sc = load_carpark_scenario(repository_data_dir());
   const SyntheticConfig paper_like;
   std::vector<double> shape(datasets), ess(datasets), resamplings(datasets);
   // Data set i and its filter use seed i + 1, as `implicit slam --datasets N --seed 1` does.
@@ -93,12 +92,13 @@ TEST(SlamReferenceTableSlow, FastSlam1) {
 // the particle noise, and all data sets share the truth path, so their errors would correlate).
 TEST(SlamReferenceTableSlow, FastSlam1AgreesWithIndependentImplementation) {
   constexpr double kNumpyMean = 0.1893, kNumpySe = 0.0015;
-  const SlamScenario sc = load_carpark_scenario(data_dir());
+  const SlamScenario sc = load_carpark_scenario(repository_data_dir());
   constexpr std::size_t kSets = 10, kRuns = 30;
   std::vector<SlamDataset> data;
   for (std::size_t k = 1; k <= kSets; ++k)
     data.push_back(read_reference_csv(
-        data_dir() / "slam-synthetic" / fmt::format("paper_le1_seed{}.csv.gz", k), sc.landmarks));
+        repository_data_dir() / "slam-synthetic" / fmt::format("paper_le1_seed{}.csv.gz", k),
+        sc.landmarks));
   std::vector<double> shape(kSets * kRuns);
   parallel_for(
       shape.size(),
