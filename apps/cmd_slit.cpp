@@ -29,6 +29,12 @@ void setup_slit(CLI::App& sub) {
                  "weights with the frozen wall; plain: unbiased weights, plain FD")
       ->check(CLI::IsMember({"paper", "corrected", "plain"}))
       ->capture_default_str();
+  sub.add_option("--estimator", cmd->settings.estimator,
+                 "wall-space: the double slit's own estimator, which samples the wall value alone; "
+                 "generic: the library's path integral estimator on the double slit as a "
+                 "ControlProblem (the same table within Monte Carlo error, slower)")
+      ->check(CLI::IsMember({"wall-space", "generic"}))
+      ->capture_default_str();
   sub.add_option("--naive-small", cmd->settings.naive_mc_small,
                  "Plain Monte Carlo walks written for Figure 1")
       ->check(in_range(1, 10000000))

@@ -90,24 +90,27 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
   opt.runs = s.runs;
   opt.estimator = estimator;
   opt.seed = ctx.seed;
+  require(s.estimator == "wall-space" || s.estimator == "generic",
+          "slit --estimator: expected 'wall-space' or 'generic', got '{}'", s.estimator);
+  opt.implementation =
+      s.estimator == "generic" ? SlitImplementation::kGeneric : SlitImplementation::kWallSpace;
   SlitTable table;
   {
     Progress progress(fmt::format("slit {} M={}", s.mode, s.samples),
                       static_cast<std::size_t>(s.runs), ctx.show_progress());
-    const auto records =
-        distribute_runs(ctx, "slit",
-                        fmt::format("seed={} M={} mode={} sampling={}", ctx.seed, s.samples, s.mode,
-                                    static_cast<int>(opt.sampling)),
-                        static_cast<std::size_t>(s.runs), [&](std::size_t r) {
-                          const auto row = slit_table_row(slit, opt, r);
-                          progress.tick();
-                          return RunRecord{row.error_x,
-                                           row.error_u,
-                                           row.crashed_exact ? 1.0 : 0.0,
-                                           row.crashed_estimate ? 1.0 : 0.0,
-                                           static_cast<double>(row.fallbacks),
-                                           row.ess_mean};
-                        });
+    const auto records = distribute_runs(
+        ctx, "slit",
+        fmt::format("seed={} M={} mode={} estimator={}", ctx.seed, s.samples, s.mode, s.estimator),
+        static_cast<std::size_t>(s.runs), [&](std::size_t r) {
+          const auto row = slit_table_row(slit, opt, r);
+          progress.tick();
+          return RunRecord{row.error_x,
+                           row.error_u,
+                           row.crashed_exact ? 1.0 : 0.0,
+                           row.crashed_estimate ? 1.0 : 0.0,
+                           static_cast<double>(row.fallbacks),
+                           row.ess_mean};
+        });
     std::vector<SlitTableRow> rows(records.size());
     for (std::size_t r = 0; r < rows.size(); ++r) {
       const auto& v = records[r];
@@ -132,7 +135,7 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
     OutputFile figure2(ctx.csv_path("figure2_slit.csv"));
     write_unguided(unguided, slit, walks);
     write_guided(guided, slit, 50, ctx.seed);
-    const auto run0 = control::simulate_slit_run(slit, s.samples, estimator, ctx.seed, 0);
+    const auto run0 = slit_run(slit, opt, 0);
     write_run(figure2, slit, run0);
     OutputFile out(ctx.csv_path(fmt::format("slit_runs_{}_M{}.csv", s.mode, s.samples)));
     out.print("run,error_x,error_u,crashed_exact,crashed_implicit,fallbacks,ess_mean\n");
@@ -151,6 +154,7 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
       {"samples", s.samples},
       {"runs", s.runs},
       {"mode", s.mode},
+      {"estimator", s.estimator},
       {"error_x_mean", 100.0 * table.error_x_mean},
       {"error_x_std", 100.0 * table.error_x_std},
       {"error_x_median", 100.0 * table.error_x_median},

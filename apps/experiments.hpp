@@ -18,10 +18,13 @@ struct SlitSettings {
   int samples = 50;                ///< M, samples per psi estimate
   int runs = 500;                  ///< closed-loop runs (Table 2)
   std::string mode = "corrected";  ///< "paper" (estimator P) or "corrected" (W2, frozen wall)
-  int naive_mc_small = 5000;       ///< plain Monte Carlo paths (Figure 1)
+  /// "wall-space" (DoubleSlit's estimator, one scalar per sample) or "generic" (the library's
+  /// path integral estimator on the double slit as a ControlProblem: the same table, slower)
+  std::string estimator = "wall-space";
+  int naive_mc_small = 5000;  ///< plain Monte Carlo paths (Figure 1)
   int naive_mc_large = 100000;
 };
-/// Keys: samples, runs, mode, error_x_mean/std/median, error_u_mean/std/median (in %),
+/// Keys: samples, runs, mode, estimator, error_x_mean/std/median, error_u_mean/std/median (in %),
 /// crash_fraction, naive_mc_samples, naive_mc_passed, seconds. CSV: figure1_*.csv, figure2_*.csv.
 nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx);
 

@@ -1,5 +1,6 @@
 #include "slit_table.hpp"
 
+#include <cmath>
 #include <utility>
 
 #include "implicit/core/error.hpp"
@@ -8,10 +9,66 @@
 
 namespace implicit::app {
 
+control::EstimatorOptions slit_estimator_options(control::SlitEstimator estimator, int samples) {
+  control::EstimatorOptions o;
+  o.samples = samples;
+  o.fd_step = 1e-3;
+  o.relative_fd_step = false;
+  o.modes = control::ModeSampling::kEachMode;
+  o.freeze_walls = estimator == control::SlitEstimator::kFrozenWall;
+  if (estimator == control::SlitEstimator::kPaper) {
+    o.modes = control::ModeSampling::kDominant;
+    o.laplace_weights = true;
+  }
+  return o;
+}
+
+control::SlitRun generic_slit_run(const control::DoubleSlit& slit,
+                                  const control::DoubleSlitProblem& problem,
+                                  const control::EstimatorOptions& options, std::uint64_t seed,
+                                  std::uint64_t run) {
+  const auto& p = slit.parameters();
+  const int K = slit.num_steps(), K1 = slit.wall_step();
+  Eigen::MatrixXd W(1, K);
+  Rng rng({seed, run, 0, purpose::kProcessNoise});
+  rng.fill_normal(W);
+  const auto loop =
+      control::simulate_closed_loop(problem, Vec<1>(p.initial_state), W, options, seed, run);
+  control::SlitRun r;
+  r.x_exact.resize(K + 1);
+  r.x_estimate.resize(K + 1);
+  r.u_exact.resize(K);
+  r.u_estimate.resize(K);
+  r.x_exact(0) = p.initial_state;
+  const double sd = std::sqrt(p.sigma * p.dt);
+  double ess_sum = 0.0;
+  for (int k = 0; k < K; ++k) {
+    r.u_exact(k) = slit.exact_control(r.x_exact(k), slit.time(k));
+    r.x_exact(k + 1) = r.x_exact(k) + r.u_exact(k) * p.dt + sd * W(0, k);
+    r.u_estimate(k) = loop.u[static_cast<std::size_t>(k)](0);
+    if (k < K1) ess_sum += loop.psi[static_cast<std::size_t>(k)].ess;
+  }
+  for (int k = 0; k <= K; ++k) r.x_estimate(k) = loop.x[static_cast<std::size_t>(k)](0);
+  r.fallbacks = loop.fallbacks;
+  control::score_slit_run(slit, r);
+  r.ess_mean = ess_sum / K1;
+  return r;
+}
+
+control::SlitRun slit_run(const control::DoubleSlit& slit, const SlitTableOptions& o,
+                          std::uint64_t run) {
+  if (o.implementation == SlitImplementation::kWallSpace)
+    return control::simulate_slit_run(slit, o.samples, o.estimator, o.seed, run, o.sampling);
+  // Exact for the double slit (no drift, no running cost) and 2-D: PathGrid's note.
+  const auto problem =
+      control::double_slit_problem(slit.parameters(), control::PathGrid::kWallsAndHorizon);
+  return generic_slit_run(slit, problem, slit_estimator_options(o.estimator, o.samples), o.seed,
+                          run);
+}
+
 SlitTableRow slit_table_row(const control::DoubleSlit& slit, const SlitTableOptions& o,
                             std::uint64_t run) {
-  const control::SlitRun r =
-      control::simulate_slit_run(slit, o.samples, o.estimator, o.seed, run, o.sampling);
+  const control::SlitRun r = slit_run(slit, o, run);
   SlitTableRow row;
   row.error_x = r.error_x;
   row.error_u = r.error_u;

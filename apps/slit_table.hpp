@@ -1,7 +1,10 @@
 #pragma once
-// Table 2 of the paper (spec §2.4.6-2.4.7): many closed-loop runs of the double slit
-// (control::simulate_slit_run), summarised per estimator. The problem, its estimators and one
-// run are the library's (implicit/control/double_slit.hpp); the table is the experiment's.
+// Table 2 of the paper (spec §2.4.6-2.4.7): many closed-loop runs of the double slit, summarised
+// per estimator. The estimated trajectory is the library's generic closed loop
+// (control::simulate_closed_loop) on the double slit as a ControlProblem resolved at the wall and
+// the horizon (double_slit_problem.hpp); DoubleSlit's own wall-space estimator
+// (control::simulate_slit_run) is the alternative, an independent check. The table is the
+// experiment's.
 //
 //   app::SlitTableOptions o;                 // M = 50, 500 runs, corrected estimator, seed 1
 //   const auto t = app::run_slit_table(control::DoubleSlit{}, o);
@@ -15,8 +18,28 @@
 #include <vector>
 
 #include "implicit/control/double_slit.hpp"
+#include "implicit/control/double_slit_problem.hpp"
+#include "implicit/control/path_integral.hpp"
 
 namespace implicit::app {
+
+/// What estimates the control in a run.
+enum class SlitImplementation {
+  kGeneric,    ///< control::estimate_control on double_slit_problem
+  kWallSpace,  ///< DoubleSlit::estimate_control, which samples the wall offset alone
+};
+
+/// The generic estimator's options for one of Table 2's estimators (spec §2.4.4-2.4.5): W2 with
+/// the frozen wall is ModeSampling::kEachMode with freeze_walls, plain FD the same without, and
+/// the paper's P is kDominant with Laplace weights; h = 1e-3 whatever x.
+control::EstimatorOptions slit_estimator_options(control::SlitEstimator estimator, int samples);
+
+/// One closed-loop run (spec §2.4.6) with the generic estimator: the noise and the exact
+/// trajectory as control::simulate_slit_run, the estimated one by control::simulate_closed_loop.
+control::SlitRun generic_slit_run(const control::DoubleSlit& slit,
+                                  const control::DoubleSlitProblem& problem,
+                                  const control::EstimatorOptions& options, std::uint64_t seed,
+                                  std::uint64_t run);
 
 /// The table's settings. Run r uses only streams keyed by (seed, r, ...), so the table is
 /// bit-identical for any thread count.
@@ -25,7 +48,8 @@ struct SlitTableOptions {
   int runs = 500;
   control::SlitEstimator estimator = control::SlitEstimator::kFrozenWall;
   std::uint64_t seed = 1;
-  control::SlitSampling sampling = control::SlitSampling::kWall;
+  SlitImplementation implementation = SlitImplementation::kWallSpace;
+  control::SlitSampling sampling = control::SlitSampling::kWall;  ///< of kWallSpace
 };
 
 struct SlitTableRow {
@@ -53,6 +77,10 @@ struct SlitTable {
 
 /// Runs options.runs closed-loop runs in parallel over runs (parallel_for, one process).
 SlitTable run_slit_table(const control::DoubleSlit& slit, const SlitTableOptions& options);
+
+/// Run `run` with the table's settings: its trajectories (Figure 2) and its row.
+control::SlitRun slit_run(const control::DoubleSlit& slit, const SlitTableOptions& options,
+                          std::uint64_t run);
 
 /// Run `run` of run_slit_table alone (its row depends on nothing else), and the table from its
 /// rows in run order: run_slit_table is summarise_slit_table of every slit_table_row. For callers

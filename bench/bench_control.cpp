@@ -76,9 +76,12 @@ BENCHMARK(BM_GenericHimmelblauControl)->Arg(0)->Arg(1)->Unit(benchmark::kMicrose
 
 // The double slit through the generic problem with a HardWall: two constrained minima (range-
 // space Newton on the 100-D path), a two-component mixture, M samples, frozen-wall FD-CRN.
-// Without the wall: the same 100-D path, for the cost of the wall machinery alone.
-void BM_GenericSlitControl(benchmark::State& state, bool wall, SamplingMap map) {
+// Without the wall: the same 100-D path, for the cost of the wall machinery alone. With the path
+// resolved at the wall and the horizon only (PathGrid::kWallsAndHorizon, exact here): a 2-D path.
+void BM_GenericSlitControl(benchmark::State& state, bool wall, SamplingMap map,
+                           PathGrid grid = PathGrid::kEveryStep) {
   ControlSpec<1, 1> s;
+  s.path_grid = grid;
   s.G << 1.0;
   s.noise_covariance << 1.0;
   s.control_cost << 0.1;
@@ -101,6 +104,15 @@ BENCHMARK_CAPTURE(BM_GenericSlitControl, mixture_linear, true, SamplingMap::kLin
 BENCHMARK_CAPTURE(BM_GenericSlitControl, mixture_random, true, SamplingMap::kRandom)
     ->Arg(50)
     ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_GenericSlitControl, mixture_linear_2d, true, SamplingMap::kLinear,
+                  PathGrid::kWallsAndHorizon)
+    ->Arg(50)
+    ->Arg(500)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_GenericSlitControl, mixture_random_2d, true, SamplingMap::kRandom,
+                  PathGrid::kWallsAndHorizon)
+    ->Arg(50)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_GenericSlitControl, no_wall_linear, false, SamplingMap::kLinear)
     ->Arg(50)
     ->Unit(benchmark::kMicrosecond);
@@ -108,7 +120,8 @@ BENCHMARK_CAPTURE(BM_GenericSlitControl, no_wall_random, false, SamplingMap::kRa
     ->Arg(50)
     ->Unit(benchmark::kMicrosecond);
 
-void BM_SlitTable2(benchmark::State& state, SlitEstimator estimator) {
+void BM_SlitTable2(benchmark::State& state, SlitEstimator estimator,
+                   implicit::app::SlitImplementation implementation) {
   const DoubleSlit slit;
   for (auto _ : state) {
     for (int M : {10, 50, 100, 500}) {
@@ -116,15 +129,29 @@ void BM_SlitTable2(benchmark::State& state, SlitEstimator estimator) {
       o.samples = M;
       o.runs = 500;
       o.estimator = estimator;
+      o.implementation = implementation;
       benchmark::DoNotOptimize(implicit::app::run_slit_table(slit, o).error_u_mean);
     }
   }
 }
-BENCHMARK_CAPTURE(BM_SlitTable2, corrected, SlitEstimator::kFrozenWall)
+BENCHMARK_CAPTURE(BM_SlitTable2, corrected, SlitEstimator::kFrozenWall,
+                  implicit::app::SlitImplementation::kGeneric)
     ->Iterations(1)
     ->UseRealTime()
     ->Unit(benchmark::kSecond);
-BENCHMARK_CAPTURE(BM_SlitTable2, paper, SlitEstimator::kPaper)
+BENCHMARK_CAPTURE(BM_SlitTable2, paper, SlitEstimator::kPaper,
+                  implicit::app::SlitImplementation::kGeneric)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond);
+// The same tables with DoubleSlit's wall-space estimator (one scalar per sample).
+BENCHMARK_CAPTURE(BM_SlitTable2, corrected_wall_space, SlitEstimator::kFrozenWall,
+                  implicit::app::SlitImplementation::kWallSpace)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(BM_SlitTable2, paper_wall_space, SlitEstimator::kPaper,
+                  implicit::app::SlitImplementation::kWallSpace)
     ->Iterations(1)
     ->UseRealTime()
     ->Unit(benchmark::kSecond);

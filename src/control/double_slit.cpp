@@ -521,12 +521,17 @@ SlitRun simulate_slit_run(const DoubleSlit& slit, int samples, SlitEstimator est
     r.x_exact(k + 1) = r.x_exact(k) + r.u_exact(k) * p.dt + sd * W(k);
     r.x_estimate(k + 1) = r.x_estimate(k) + r.u_estimate(k) * p.dt + sd * W(k);
   }
+  score_slit_run(slit, r);
+  r.ess_mean = ess_sum / K1;
+  return r;
+}
+
+void score_slit_run(const DoubleSlit& slit, SlitRun& r) {
+  const int K1 = slit.wall_step();
   r.crashed_exact = !slit.in_slits(r.x_exact(K1));
   r.crashed_estimate = !slit.in_slits(r.x_estimate(K1));
   r.error_x = (r.x_estimate - r.x_exact).norm() / r.x_exact.norm();
   r.error_u = (r.u_estimate - r.u_exact).norm() / r.u_exact.norm();
-  r.ess_mean = ess_sum / K1;
-  return r;
 }
 
 }  // namespace implicit::control

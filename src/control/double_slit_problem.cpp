@@ -2,8 +2,9 @@
 
 namespace implicit::control {
 
-ControlSpec<1, 1> double_slit_spec(const DoubleSlitParameters& p) {
+ControlSpec<1, 1> double_slit_spec(const DoubleSlitParameters& p, PathGrid grid) {
   ControlSpec<1, 1> s;
+  s.path_grid = grid;
   s.G << 1.0;
   s.noise_covariance << p.sigma;
   s.control_cost << p.control_cost;
@@ -19,9 +20,9 @@ HardWall<1> double_slit_wall(const DoubleSlitParameters& p) {
   return wall;
 }
 
-DoubleSlitProblem double_slit_problem(const DoubleSlitParameters& p) {
+DoubleSlitProblem double_slit_problem(const DoubleSlitParameters& p, PathGrid grid) {
   check_double_slit_parameters(p);
-  return DoubleSlitProblem(FreeWalkerModel{}, double_slit_spec(p), {double_slit_wall(p)});
+  return DoubleSlitProblem(FreeWalkerModel{}, double_slit_spec(p, grid), {double_slit_wall(p)});
 }
 
 }  // namespace implicit::control

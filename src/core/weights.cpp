@@ -68,6 +68,32 @@ double relative_standard_error(std::span<const double> log_weights) {
   return std::sqrt(var / n) / mean;
 }
 
+WeightMoments weight_moments(std::span<const double> log_weights) {
+  WeightMoments r;
+  const std::size_t n = log_weights.size();
+  double m = -std::numeric_limits<double>::infinity();
+  for (double v : log_weights) m = std::max(m, v);
+  if (!std::isfinite(m)) {
+    if (m > 0.0) r.log_mean = m;  // a +inf entry, as log_mean_exp
+    return r;
+  }
+  double s1 = 0.0, s2 = 0.0;
+  for (double v : log_weights) {
+    const double w = std::exp(v - m);
+    s1 += w;
+    s2 += w * w;
+  }
+  const double nd = static_cast<double>(n);
+  r.log_mean = m + std::log(s1) - std::log(nd);
+  r.ess = s1 * s1 / s2;
+  if (n >= 2) {
+    const double mean = s1 / nd;
+    const double var = std::max(0.0, (s2 / nd - mean * mean) * nd / (nd - 1.0));
+    r.relative_se = std::sqrt(var / nd) / mean;
+  }
+  return r;
+}
+
 double circular_mean(std::span<const double> angles, std::span<const double> w) {
   require(angles.size() == w.size(), "circular_mean: expected {} weights, got {}", angles.size(),
           w.size());

@@ -75,3 +75,31 @@ TEST(DoubleSlitClosedLoop, ThreadCountIndependent) {
     EXPECT_EQ(a.runs[r].error_x, b.runs[r].error_x);
   }
 }
+
+TEST(SlitTable2Reduced, GenericEstimatorGivesTheSameTable) {
+  // The same reduced tables with the library's generic estimator on the double slit as a
+  // ControlProblem (W2 = ModeSampling::kEachMode, P = kDominant with Laplace weights): the
+  // same references and tolerances as above.
+  const int runs = 100;
+  auto generic = [&](int M, SlitEstimator e) {
+    SlitTableOptions o;
+    o.samples = M;
+    o.runs = runs;
+    o.estimator = e;
+    o.seed = 2025;
+    o.implementation = SlitImplementation::kGeneric;
+    return run_slit_table(DoubleSlit{}, o);
+  };
+  const auto w2 = generic(50, SlitEstimator::kFrozenWall);
+  EXPECT_NEAR(w2.error_x_mean, 0.0029, 4.5 * se(w2.error_x_std, runs));
+  EXPECT_NEAR(w2.error_u_mean, 0.0243, 4.5 * se(w2.error_u_std, runs));
+  EXPECT_EQ(w2.fallbacks, 0);
+  const auto w2_500 = generic(500, SlitEstimator::kFrozenWall);
+  EXPECT_NEAR(w2_500.error_u_mean, 0.0073, 4.5 * se(w2_500.error_u_std, runs));
+  EXPECT_NEAR(w2_500.error_x_mean, 0.0008, 4.5 * se(w2_500.error_x_std, runs));
+  const auto p = generic(50, SlitEstimator::kPaper);
+  EXPECT_NEAR(p.error_x_mean, 0.0261, 4.5 * se(p.error_x_std, runs));
+  EXPECT_NEAR(p.error_u_mean, 0.0496, 4.5 * se(p.error_u_std, runs));
+  EXPECT_NEAR(p.error_u_median, 0.038, 0.005);
+  EXPECT_GT(p.crash_fraction, p.exact_crash_fraction + 0.1);
+}

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "implicit/implicit.hpp"
@@ -240,3 +241,29 @@ TEST(Resampling, EssTrigger) {
 
 }  // namespace
 }  // namespace implicit
+
+TEST(Weights, MomentsInOnePassMatchTheSeparateFunctions) {
+  // weight_moments fuses log_mean_exp, the ESS of normalize_log_weights and
+  // relative_standard_error; it must agree with each, including -inf entries and the edge cases.
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::vector<double>> cases = {
+      {0.3, -1.2, 2.5, -700.0, 1.0}, {-inf, 4.0, 4.0, -2.0}, {12.0}, {-3.0, -3.0, -3.0}};
+  for (const auto& lw : cases) {
+    const auto m = implicit::weight_moments(lw);
+    std::vector<double> w(lw.size());
+    const auto s = implicit::normalize_log_weights(lw, w);
+    EXPECT_NEAR(m.log_mean, implicit::log_mean_exp(lw), 1e-13 * (1.0 + std::abs(m.log_mean)));
+    EXPECT_NEAR(m.ess, s.ess, 1e-12 * s.ess);
+    const double se = implicit::relative_standard_error(lw);
+    if (std::isfinite(se))
+      EXPECT_NEAR(m.relative_se, se, 1e-12 * (1.0 + se));
+    else
+      EXPECT_EQ(m.relative_se, se);
+  }
+  const std::vector<double> dead = {-inf, -inf};
+  const auto d = implicit::weight_moments(dead);
+  EXPECT_EQ(d.log_mean, -inf);
+  EXPECT_EQ(d.ess, 0.0);
+  EXPECT_EQ(d.relative_se, inf);
+  EXPECT_EQ(implicit::weight_moments(std::vector<double>{}).log_mean, -inf);
+}

@@ -20,15 +20,19 @@ namespace implicit::control {
 template <int P>
 struct ControlEstimate {
   Vec<P> u = Vec<P>::Zero();
-  PsiEstimate psi;      ///< at x
-  bool defined = true;  ///< false if log psi_hat was -inf at some x +- h e_i
+  PsiEstimate psi;        ///< at x
+  bool defined = true;    ///< false if u could not be estimated (see fallback)
+  bool fallback = false;  ///< log psi_hat was -inf at x or some x +- h e_i: u is the Laplace one
   MinimizeStatus worst_status = MinimizeStatus::kConverged;
 };
 
 /// u = gamma R^-1 G^T grad log psi_hat by central differences with common random numbers: the
 /// same reference variables at x + h e_i and x - h e_i, minimisers warm-started at mu(x). `warm`
 /// (a path y_1..y_n, e.g. the previous step's minimiser shifted by one step) starts the
-/// minimisation at x; empty: the drift path.
+/// minimisation at x; empty: the drift path. A wall at t_k is behind the control (it moves only
+/// the states after t_k): the estimates ignore it (WallSampling::test_start). When no sample passes
+/// at x or at some x +- h e_i, u differentiates the Laplace approximation of psi instead
+/// (o.laplace_fallback; `fallback`), or is left undefined (`defined` false).
 template <typename Problem>
 ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
                                                        const Vec<Problem::kStateDim>& x, int k,
@@ -43,15 +47,16 @@ ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
     references.rewind();
     return o.method == PsiMethod::kImplicit
                ? estimate_log_psi_implicit(problem, xp, k, o.samples, key, start, o.minimize, o.map,
-                                           frozen, &references)
-               : estimate_log_psi_monte_carlo(problem, xp, k, o.samples, key);
+                                           frozen, &references, {o.modes, o.laplace_weights, false})
+               : estimate_log_psi_monte_carlo(problem, xp, k, o.samples, key, false);
   };
   ControlEstimate<Problem::kControlDim> c;
   c.psi = psi(x, warm);
   if (o.freeze_walls && !c.psi.modes.empty()) frozen = &c.psi.modes;
   c.worst_status = c.psi.status;
-  const double h = o.fd_step * std::max(1.0, x.cwiseAbs().maxCoeff());
-  Vec<D> grad = Vec<D>::Zero();
+  const double h = o.fd_step * (o.relative_fd_step ? std::max(1.0, x.cwiseAbs().maxCoeff()) : 1.0);
+  Vec<D> grad = Vec<D>::Zero(), laplace = Vec<D>::Zero();
+  bool sampled = std::isfinite(c.psi.log_psi), laplace_ok = true;
   for (int i = 0; i < D; ++i) {
     Vec<D> xp = x, xm = x;
     xp(i) += h;
@@ -59,11 +64,16 @@ ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
     const auto ep = psi(xp, c.psi.minimizer), em = psi(xm, c.psi.minimizer);
     if (ep.status != MinimizeStatus::kConverged) c.worst_status = ep.status;
     if (em.status != MinimizeStatus::kConverged) c.worst_status = em.status;
-    if (!std::isfinite(ep.log_psi) || !std::isfinite(em.log_psi)) {
-      c.defined = false;
-      continue;
-    }
+    sampled = sampled && std::isfinite(ep.log_psi) && std::isfinite(em.log_psi);
     grad(i) = (ep.log_psi - em.log_psi) / (2.0 * h);
+    laplace_ok =
+        laplace_ok && std::isfinite(ep.log_psi_laplace) && std::isfinite(em.log_psi_laplace);
+    laplace(i) = (ep.log_psi_laplace - em.log_psi_laplace) / (2.0 * h);
+  }
+  if (!sampled) {
+    c.fallback = o.laplace_fallback && laplace_ok;
+    c.defined = c.fallback;
+    grad = c.fallback ? laplace : Vec<D>::Zero();
   }
   c.u = problem.control_from_gradient(grad);
   return c;
@@ -77,6 +87,7 @@ struct ClosedLoopResult {
   std::vector<Vec<Problem::kStateDim>> x;
   std::vector<Vec<Problem::kControlDim>> u;
   std::vector<PsiEstimate> psi;
+  int fallbacks = 0;  ///< steps whose control is the Laplace one (no sample passed)
 };
 
 template <typename Problem>
@@ -97,11 +108,15 @@ ClosedLoopResult<Problem> simulate_closed_loop(const Problem& problem,
   for (int k = 0; k < K; ++k) {
     const auto c = estimate_control(problem, r.x.back(), k, o,
                                     {seed, run, static_cast<std::uint64_t>(k), 0}, warm);
-    const Eigen::Index rest = static_cast<Eigen::Index>(K - k - 1) * D;
-    warm = c.psi.minimizer.size() == rest + D ? Eigen::VectorXd(c.psi.minimizer.tail(rest))
-                                              : Eigen::VectorXd();
+    // The path from step k + 1 is the tail of the path from step k (without y_1 when it sat at
+    // step k + 1: always on every step, only at a wall or the horizon otherwise).
+    const Eigen::Index rest = static_cast<Eigen::Index>(problem.path_length(k + 1)) * D;
+    warm = c.psi.minimizer.size() == static_cast<Eigen::Index>(problem.path_length(k)) * D
+               ? Eigen::VectorXd(c.psi.minimizer.tail(rest))
+               : Eigen::VectorXd();
     r.u.push_back(c.u);
     r.psi.push_back(c.psi);
+    r.fallbacks += c.fallback ? 1 : 0;
     const Vec<D>& x = r.x.back();
     const Vec<D> w = noise.col(k);
     r.x.push_back(

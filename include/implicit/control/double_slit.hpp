@@ -61,6 +61,9 @@ void check_double_slit_parameters(const DoubleSlitParameters& p);
 /// but a `HardWall` passed beside it (double_slit_problem.hpp builds both from the parameters).
 /// Also the simplest nonzero test problem after the wall.
 struct FreeWalkerModel {
+  /// Zero drift, no running cost, a quadratic end cost: F is quadratic, and with walls the
+  /// estimators may sample only the wall values (wall_values.hpp).
+  static constexpr bool kLinearQuadratic = true;
   template <typename T>
   Eigen::Matrix<T, 1, 1> drift(const Eigen::Matrix<T, 1, 1>& x, double) const {
     return x * 0.0;
@@ -213,6 +216,11 @@ struct SlitRun {
   int fallbacks = 0;                    ///< steps where no sample passed
   double ess_mean = 0.0;                ///< mean ESS over the steps k < K1
 };
+
+/// Fills a run's crash flags (x(t1) outside the slits) and its relative errors e_x, e_u from its
+/// trajectories (spec §2.4.6); simulate_slit_run ends with it, and so can any other controller's
+/// run.
+void score_slit_run(const DoubleSlit& slit, SlitRun& run);
 
 /// Runs the closed loop for run number `run`: noise W_k from stream (seed, run, 0,
 /// kProcessNoise) (if `noise` is empty) and reference variables from (seed, run, k, kReference).

@@ -10,8 +10,9 @@
 //   const auto problem = implicit::control::double_slit_problem();   // Table 1 parameters
 //   auto c = estimate_control(problem, implicit::Vec<1>(1.0), 0, {.samples = 50}, {.seed = 1});
 //
-// Grid step k is the time t = k dt, as in DoubleSlit. The slits are closed intervals and the
-// openings open ones: the edges have probability zero, so psi is the same.
+// Grid step k is the time t = k dt, as in DoubleSlit. With PathGrid::kWallsAndHorizon the path is
+// resolved at t1 and tf only, which is exact for this model and much faster. The slits are closed
+// intervals and the openings open ones: the edges have probability zero, so psi is the same.
 
 #include "implicit/control/double_slit.hpp"
 #include "implicit/control/problem.hpp"
@@ -20,14 +21,17 @@ namespace implicit::control {
 
 using DoubleSlitProblem = ControlProblem<1, 1, FreeWalkerModel>;
 
-/// G = 1, Q Q^T = sigma, R = r, horizon tf, step dt.
-ControlSpec<1, 1> double_slit_spec(const DoubleSlitParameters& p);
+/// G = 1, Q Q^T = sigma, R = r, horizon tf, step dt, the path resolved where `grid` says.
+ControlSpec<1, 1> double_slit_spec(const DoubleSlitParameters& p,
+                                   PathGrid grid = PathGrid::kEveryStep);
 
 /// The wall at t1 along x with the openings (lower, upper) of the two slits.
 HardWall<1> double_slit_wall(const DoubleSlitParameters& p);
 
-/// The double slit as a generic problem with the wall. Throws InvalidArgument for bad
-/// parameters (check_double_slit_parameters).
-DoubleSlitProblem double_slit_problem(const DoubleSlitParameters& p = {});
+/// The double slit as a generic problem with the wall. PathGrid::kWallsAndHorizon is exact here
+/// (no drift, no running cost) and samples 2-D paths (the wall and tf) instead of K - k steps.
+/// Throws InvalidArgument for bad parameters (check_double_slit_parameters).
+DoubleSlitProblem double_slit_problem(const DoubleSlitParameters& p = {},
+                                      PathGrid grid = PathGrid::kEveryStep);
 
 }  // namespace implicit::control

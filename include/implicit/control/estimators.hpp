@@ -14,7 +14,9 @@
 #include <Eigen/Core>
 
 #include "implicit/control/path_solvers.hpp"
+#include "implicit/control/wall_mixture.hpp"
 #include "implicit/control/wall_modes.hpp"
+#include "implicit/control/wall_values.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/implicit_maps.hpp"
@@ -41,9 +43,24 @@ inline std::string_view to_string(SamplingMap m) {
   return m == SamplingMap::kLinear ? "linear" : "random";
 }
 
+/// With hard walls ahead: which wall modes (wall_modes.hpp) draw the samples.
+enum class ModeSampling {
+  /// M samples from the Gaussian mixture of all modes, weighted by exp(-F) / q (the default).
+  kMixture,
+  /// M samples from every mode; a sample counts only inside its own mode's openings. The modes'
+  /// regions are disjoint, so psi is the sum of the modes' means (spec §2.4.4, W2).
+  kEachMode,
+  /// M samples from the mode of largest Laplace mass only: estimates that mode's share of psi
+  /// (spec §2.4.4, W1; with EstimatorOptions::laplace_weights the paper's estimator P).
+  kDominant,
+};
+
 /// One estimate of log psi with diagnostics.
 struct PsiEstimate {
   double log_psi = -std::numeric_limits<double>::infinity();
+  /// log of the Laplace approximation of psi over the modes sampled (the Gaussian mass at each
+  /// minimum): what the controller differentiates when no sample passed (laplace_fallback).
+  double log_psi_laplace = -std::numeric_limits<double>::infinity();
   double ess = 0.0;
   int samples = 0;
   int wall_hits = 0;     ///< samples with F = +inf or outside a wall opening (zero weight)
@@ -63,20 +80,39 @@ struct EstimatorOptions {
   /// between passing and hitting the wall between x + h and x - h (that switch makes the finite
   /// difference spike).
   bool freeze_walls = true;
-  double fd_step = 1e-4;  ///< h = fd_step max(1, |x|_inf) for the central differences
+  double fd_step = 1e-4;         ///< h = fd_step max(1, |x|_inf) for the central differences
+  bool relative_fd_step = true;  ///< false: h = fd_step whatever x
   MinimizeOptions minimize{};
+  ModeSampling modes = ModeSampling::kMixture;  ///< with hard walls ahead
+  /// The paper's biased estimator (spec §2.4.4, P): a sample inside its mode's openings weighs
+  /// exp(-phi) of that mode instead of exp(-F(y) + |xi|^2 / 2). Only to reproduce the paper's
+  /// tables; needs the linear map and ModeSampling::kEachMode or kDominant.
+  bool laplace_weights = false;
+  /// When log psi_hat is -inf at x or at some x +- h (no sample passed), differentiate the
+  /// Laplace approximation instead (ControlEstimate::fallback); otherwise u is left undefined.
+  bool laplace_fallback = true;
+};
+
+/// How the estimator of psi treats the walls and their modes (from EstimatorOptions).
+struct WallSampling {
+  ModeSampling modes = ModeSampling::kMixture;
+  bool laplace_weights = false;
+  /// A wall at t_k tests x itself (psi = 0 outside its openings). The controller turns this off:
+  /// u_k moves only the states after t_k, so a wall at t_k is behind it (spec §2.4.6: a run that
+  /// misses the slits at t1 goes on with the control for t >= t1).
+  bool test_start = true;
 };
 
 namespace detail {
-inline PsiEstimate summarize(std::vector<double>& lw) {
+inline PsiEstimate summarize(const std::vector<double>& lw) {
   PsiEstimate e;
   e.samples = static_cast<int>(lw.size());
   for (double l : lw) e.wall_hits += std::isfinite(l) ? 0 : 1;
-  e.log_psi = log_mean_exp(lw);
+  const WeightMoments m = weight_moments(lw);  // one pass of exponentials: this is hot
+  e.log_psi = m.log_mean;
   if (e.wall_hits < e.samples) {
-    std::vector<double> w(lw.size());
-    e.ess = normalize_log_weights(lw, w).ess;
-    e.relative_se = relative_standard_error(lw);
+    e.ess = m.ess;
+    e.relative_se = m.relative_se;
   }
   return e;
 }
@@ -101,7 +137,26 @@ PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
   }
   // The weights are the kernel's implicit weights of exp(-F), divided by the normaliser of the
   // path measure (spec §2.2): psi = Z / normaliser.
-  const double log_norm = problem.log_normalizer(n);
+  const double log_norm = problem.path_log_normalizer(F.start_step());
+  const double laplace = implicit_log_weight(N, 0.0, r.value, r.factor.log_det_L()) - log_norm;
+  if constexpr (declares_linear_quadratic<typename Problem::ModelType>()) {
+    if (map == SamplingMap::kLinear && r.exact_factor && r.converged()) {
+      // F is quadratic and mu its minimum: every linear-map weight is this Laplace value, so
+      // drawing the samples would change nothing but rounding. The model's word is checked at
+      // y = mu + L^{-T} e_0 (where d^T H d = 1).
+      Eigen::VectorXd d = Eigen::VectorXd::Unit(N, 0);
+      r.factor.upper_solve_in_place(d);
+      require_quadratic(F, r.x, r.value, r.gradient, d, 1.0);
+      PsiEstimate e;
+      e.samples = M;
+      e.ess = M;
+      e.relative_se = 0.0;
+      e.log_psi = e.log_psi_laplace = laplace;
+      e.status = r.status;
+      e.minimizer = std::move(r.x);
+      return e;
+    }
+  }
   std::vector<double> lw(static_cast<std::size_t>(M));
   Eigen::VectorXd xi(N), y(N);
   int failures = 0;
@@ -132,6 +187,7 @@ PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
     }
   }
   PsiEstimate out = summarize(lw);
+  out.log_psi_laplace = laplace;
   out.map_failures = failures;
   out.wall_hits -= failures;
   out.status = r.status;
@@ -139,184 +195,61 @@ PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
   return out;
 }
 
-/// The mixture proposal over the wall modes: each mode's constrained minimum, its banded factor
-/// and log det L, and after normalise() the log mixture weights and their cumulative table.
-template <int D>
-struct WallMixture {
-  std::vector<WallMode> modes;
-  std::vector<BandedFactor<D>> factors;
-  std::vector<double> log_det, log_pi, cumulative;
-  double total = 0.0;  ///< the last cumulative weight (1 up to rounding)
-  MinimizeStatus status = MinimizeStatus::kConverged;  ///< the worst mode's
-
-  /// log pi_c = log_weight_c - log sum; false if every mode has weight 0.
-  bool normalise() {
-    log_pi.resize(modes.size());
-    for (std::size_t c = 0; c < modes.size(); ++c) log_pi[c] = modes[c].log_weight;
-    const double lse = log_sum_exp(log_pi);
-    if (!std::isfinite(lse)) return false;
-    cumulative.resize(modes.size());
-    total = 0.0;
-    for (std::size_t c = 0; c < modes.size(); ++c) {
-      log_pi[c] -= lse;
-      modes[c].log_weight = log_pi[c];
-      total += std::exp(log_pi[c]);
-      cumulative[c] = total;
-    }
-    return true;
-  }
-  /// The component for a uniform u in [0, 1), never one of weight 0.
-  std::size_t choose(double u01) const {
-    const double u = u01 * total;
-    std::size_t c = 0;
-    while (c + 1 < modes.size() && !(u < cumulative[c])) ++c;
-    while (!std::isfinite(log_pi[c]) && c > 0) --c;
-    return c;
-  }
-};
-
-/// Finds every mode's constrained minimum (mode_minimum) and Laplace mass exp(-phi) / det L;
-/// `frozen` keeps the given modes' wall values and mixture weights.
+/// Stratified over the modes (ModeSampling::kEachMode, or kDominant with `used` one mode): M
+/// samples from each mode c in `used`; a sample counts only inside c's own openings, so each
+/// mode's mean estimates its own share psi_c and their sum estimates psi. Appends M log weights
+/// per mode (without the path normaliser) to `lw`; returns the random map's failures.
 template <typename PathF, typename Problem>
-WallMixture<PathF::Block> fit_wall_modes(const PathF& F, const WallsAhead<Problem>& w,
-                                         const Eigen::VectorXd& start,
-                                         const std::vector<WallMode>* frozen,
-                                         const MinimizeOptions& options) {
-  constexpr int D = PathF::Block;
+int sample_each_mode(const PathF& F, const WallsAhead<Problem>& w, WallMixture<PathF::Block>& mix,
+                     const std::vector<std::size_t>& used, int M, ReplayableNormals& refs,
+                     SamplingMap map, bool laplace_weights, std::vector<double>& lw) {
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
-  const int A = w.size();
-  WallMixture<D> mix;
-  if (frozen) {
-    mix.modes = *frozen;
-    for (const auto& md : mix.modes)
-      require(md.walls == w.ahead && md.minimizer.size() == start.size(),
-              "path integral estimator: the frozen modes belong to another step or problem");
-  } else {
-    mix.modes = enumerate_modes(w);
-  }
-  // The unconstrained minimiser: the start of every mode's constrained search.
-  Eigen::VectorXd free_min = start;
-  if (!frozen) {
-    const auto r = minimize_path(F, start, options);
-    if (r.status != MinimizeStatus::kNonFinite) free_min = r.x;
-  }
-  mix.factors.resize(mix.modes.size());
-  mix.log_det.assign(mix.modes.size(), 0.0);
-  PathConstraints cons;
-  for (std::size_t c = 0; c < mix.modes.size(); ++c) {
+  const int N = static_cast<int>(mix.modes.front().minimizer.size());
+  Eigen::VectorXd xi(N), y(N), d(N);
+  std::vector<double> a_mu(static_cast<std::size_t>(w.size())),
+      a_d(static_cast<std::size_t>(w.size()));
+  int failures = 0;
+  for (std::size_t c : used) {
     WallMode& md = mix.modes[c];
-    auto r = mode_minimum(F, w, md, free_min, frozen != nullptr, options, cons);
-    md.status = r.status;
-    md.minimizer = r.x;
-    md.samples = 0;
-    md.wall_hits = 0;
-    md.wall_values.resize(static_cast<std::size_t>(A));
-    for (int i = 0; i < A; ++i) md.wall_values[static_cast<std::size_t>(i)] = w.value(i, r.x);
-    const bool usable = r.status != MinimizeStatus::kNonFinite && r.factor_ok;
-    md.phi = usable ? r.value : std::numeric_limits<double>::infinity();
-    if (usable) {
-      mix.factors[c] = std::move(r.factor);
-      mix.log_det[c] = mix.factors[c].log_det_L();
-    }
-    if (!frozen) md.log_weight = usable ? -md.phi - mix.log_det[c] : kNegInf;
-    if (!usable) md.log_weight = kNegInf;
-    if (md.status != MinimizeStatus::kConverged) mix.status = md.status;
-  }
-  return mix;
-}
-
-/// log q(y) / q_c(y) for the linear mixture q = sum_i pi_i N(mu_i, H_i^{-1}) at y = mu_c +
-/// L_c^{-T} xi, drawn from component c: the weight of the mixture is the kernel's implicit weight
-/// of component c divided by this ratio. Streamed, no allocation (`diff` is scratch).
-template <int D>
-double mixture_log_ratio(const WallMixture<D>& mix, const Eigen::VectorXd& y,
-                         const Eigen::VectorXd& xi, std::size_t c, Eigen::VectorXd& diff) {
-  // log(pi_i q_i(y) / q_c(y)); the (2 pi)^{-N/2} of the components cancels.
-  const double log_q_c = mix.log_det[c] - 0.5 * xi.squaredNorm();
-  double top = -std::numeric_limits<double>::infinity(), sum = 0.0;
-  for (std::size_t i = 0; i < mix.modes.size(); ++i) {
-    if (!std::isfinite(mix.log_pi[i])) continue;
-    double t = mix.log_pi[i];
-    if (i != c) {
-      diff = y - mix.modes[i].minimizer;
-      t += mix.log_det[i] - 0.5 * upper_norm2(mix.factors[i], diff) - log_q_c;
-    }
-    if (t > top) {
-      sum = sum * std::exp(top - t) + 1.0;
-      top = t;
-    } else {
-      sum += std::exp(t - top);
+    for (int j = 0; j < M; ++j) {
+      refs.next(xi);
+      ++md.samples;
+      double l = kNegInf;
+      if (map == SamplingMap::kRandom) {
+        const auto ray = random_map_in_mode(F, w, mix, c, xi, d, a_mu, a_d, l);
+        if (ray == RayStatus::kOk)
+          l += mix.log_pi[c];  // the mode was not chosen at random: no 1 / pi_c
+        else if (ray == RayStatus::kJump)
+          ++md.wall_hits;
+        else
+          ++failures;
+        lw.push_back(ray == RayStatus::kOk ? l : kNegInf);
+        continue;
+      }
+      y = xi;
+      mix.factors[c].upper_solve_in_place(y);
+      y += md.minimizer;
+      const double rho = xi.squaredNorm();
+      if (inside_mode(w, md, y)) {
+        const double fy = laplace_weights ? md.phi + 0.5 * rho : F.evaluate(y, nullptr, nullptr);
+        l = implicit_log_weight(N, rho, fy, mix.log_det[c]);
+      }
+      if (!std::isfinite(l)) ++md.wall_hits;
+      lw.push_back(l);
     }
   }
-  return top + std::log(sum);
+  return failures;
 }
 
-/// Random map inside mode c only: F restricted to the paths through c's openings (+inf
-/// elsewhere), integrated along rays from mu_c. That region is convex and mu_c is the
-/// constrained minimum, so for a convex F every ray sees F - phi_c increase: the map is
-/// one-to-one onto the region. psi = sum_c Z_c, and choosing c with probability pi_c makes
-/// w / pi_c unbiased for it. Writes the log weight (without the path normaliser) to `l`.
-template <typename PathF, typename Problem>
-RayStatus random_map_in_mode(const PathF& F, const WallsAhead<Problem>& w,
-                             const WallMixture<PathF::Block>& mix, std::size_t c,
-                             const Eigen::VectorXd& xi, Eigen::VectorXd& d,
-                             std::vector<double>& a_mu, std::vector<double>& a_d, double& l) {
-  constexpr int D = PathF::Block;
-  const int A = w.size();
-  const int N = static_cast<int>(xi.size());
-  const double rho = xi.squaredNorm();
-  d = xi / std::sqrt(rho);
-  mix.factors[c].upper_solve_in_place(d);
-  const WallMode& md = mix.modes[c];
-  for (int i = 0; i < A; ++i) {
-    const auto& a = w.wall(i).direction;
-    const auto s = static_cast<std::size_t>(i);
-    a_mu[s] = a.dot(md.minimizer.template segment<D>(w.block_of(i) * D));
-    a_d[s] = a.dot(d.template segment<D>(w.block_of(i) * D));
-  }
-  // mu_c sits on the edge of an opening when that wall is clamped: a ray leaving through the
-  // edge sees F = +inf for every lambda > 0, which the root finder reports as a jump at 0
-  // (weight 0), like any other jump over the level.
-  auto inside = [&](double lambda) {
-    for (int i = 0; i < A; ++i)
-      if (!w.opening(i, md).contains(a_mu[static_cast<std::size_t>(i)] +
-                                     lambda * a_d[static_cast<std::size_t>(i)]))
-        return false;
-    return true;
-  };
-  const RestrictedPath restricted{F, inside};
-  double lambda = 0.0, slope = 0.0;
-  const double level = md.phi + 0.5 * rho;
-  const auto ray = solve_path_ray(restricted, md.minimizer, d, level, rho, lambda, slope);
-  if (ray == RayStatus::kOk)
-    l = implicit_log_weight(N, rho, level, mix.log_det[c],
-                            random_map_log_jacobian(N, rho, lambda, slope)) -
-        mix.log_pi[c];
-  return ray;
-}
-
-/// Implicit sampling of psi with walls ahead: a mixture over the wall modes (fit_wall_modes),
-/// component choice from stream (key..., kMixture), references from `refs`.
+/// M samples from the mixture over the wall modes, component choice from `pick`: the log weights
+/// exp(-F) / q (without the path normaliser) to `lw`; returns the random map's failures.
 template <typename Problem, typename PathF>
-PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateDim>& x, int k,
-                              const PathF& F, const WallsAhead<Problem>& w,
-                              const Eigen::VectorXd& start, int M, const StreamKey& key,
-                              ReplayableNormals& refs, const MinimizeOptions& options,
-                              SamplingMap map, const std::vector<WallMode>* frozen) {
+int sample_mixture(const PathF& F, const WallsAhead<Problem>& w, WallMixture<PathF::Block>& mix,
+                   int M, Rng& pick, ReplayableNormals& refs, SamplingMap map,
+                   std::vector<double>& lw) {
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
-  const int n = F.num_blocks(), N = static_cast<int>(start.size());
-  auto mix = fit_wall_modes(F, w, start, frozen, options);
-  if (!mix.normalise()) {
-    PsiEstimate dead;  // psi = 0: every sample has zero weight
-    dead.samples = M;
-    dead.wall_hits = M;
-    dead.status = mix.status;
-    dead.modes = std::move(mix.modes);
-    return dead;
-  }
-  Rng pick({key.seed, key.step, key.index, purpose::kMixture});
-  const double log_norm = problem.log_normalizer(n);
-  std::vector<double> lw(static_cast<std::size_t>(M));
+  const int N = static_cast<int>(mix.modes.front().minimizer.size());
+  lw.resize(static_cast<std::size_t>(M));
   Eigen::VectorXd xi(N), y(N), diff(N), d(N);
   int failures = 0;
   std::vector<double> a_mu(static_cast<std::size_t>(w.size())),
@@ -328,9 +261,7 @@ PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateD
     double& l = lw[static_cast<std::size_t>(j)];
     if (map == SamplingMap::kRandom) {
       const auto ray = random_map_in_mode(F, w, mix, c, xi, d, a_mu, a_d, l);
-      if (ray == RayStatus::kOk) {
-        l -= log_norm;
-      } else {
+      if (ray != RayStatus::kOk) {
         if (ray == RayStatus::kJump)
           ++mix.modes[c].wall_hits;
         else
@@ -342,25 +273,71 @@ PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateD
     y = xi;
     mix.factors[c].upper_solve_in_place(y);
     y += mix.modes[c].minimizer;
-    const double fy = problem.passes_walls(x, k, y) ? F.evaluate(y, nullptr, nullptr)
-                                                    : std::numeric_limits<double>::infinity();
+    // Walls at step k tested x before sampling; those behind do not count.
+    const double fy =
+        w.passes(y) ? F.evaluate(y, nullptr, nullptr) : std::numeric_limits<double>::infinity();
     if (!std::isfinite(fy)) {
       ++mix.modes[c].wall_hits;
       l = kNegInf;
       continue;
     }
     l = implicit_log_weight(N, xi.squaredNorm(), fy, mix.log_det[c]) -
-        mixture_log_ratio(mix, y, xi, c, diff) - log_norm;
+        mixture_log_ratio(mix, y, xi, c, diff);
   }
+  return failures;
+}
+
+/// Implicit sampling of psi with walls ahead over the wall modes (fit_wall_modes): a mixture
+/// (component choice from stream (key..., kMixture)) or stratified over the modes
+/// (sample_each_mode), references from `refs`.
+template <typename Problem, typename PathF>
+PsiEstimate sample_with_walls(const Problem& problem, const PathF& F, const WallsAhead<Problem>& w,
+                              const Eigen::VectorXd& start, int M, const StreamKey& key,
+                              ReplayableNormals& refs, const MinimizeOptions& options,
+                              SamplingMap map, const std::vector<WallMode>* frozen,
+                              const WallSampling& ws) {
+  const int N = static_cast<int>(start.size());
+  auto mix = fit_wall_modes(F, w, start, frozen, options,
+                            declares_linear_quadratic<typename Problem::ModelType>());
+  if (!mix.normalise()) {
+    PsiEstimate dead;  // psi = 0: every sample has zero weight
+    dead.samples = M;
+    dead.wall_hits = M;
+    dead.status = mix.status;
+    dead.modes = std::move(mix.modes);
+    return dead;
+  }
+  const std::size_t best = static_cast<std::size_t>(
+      std::max_element(mix.log_pi.begin(), mix.log_pi.end()) - mix.log_pi.begin());
+  std::vector<std::size_t> used;
+  for (std::size_t c = 0; c < mix.modes.size(); ++c)
+    if (std::isfinite(mix.log_pi[c]) && (ws.modes != ModeSampling::kDominant || c == best))
+      used.push_back(c);
+  const double log_norm = problem.path_log_normalizer(F.start_step());
+  std::vector<double> lw;
+  int failures = 0;
+  double log_count = 0.0;  // stratified: psi_hat is the sum of the modes' means
+  if (ws.modes == ModeSampling::kMixture) {
+    Rng pick({key.seed, key.step, key.index, purpose::kMixture});
+    failures = sample_mixture(F, w, mix, M, pick, refs, map, lw);
+  } else {
+    // Linear-quadratic problems need only the wall values (wall_values.hpp).
+    bool done = false;
+    if constexpr (declares_linear_quadratic<typename Problem::ModelType>())
+      done = map == SamplingMap::kLinear &&
+             sample_wall_values(F, w, mix, used, M, refs, ws.laplace_weights, lw);
+    if (!done) failures = sample_each_mode(F, w, mix, used, M, refs, map, ws.laplace_weights, lw);
+    log_count = std::log(static_cast<double>(used.size()));
+  }
+  for (double& l : lw) l -= log_norm;
   PsiEstimate result = summarize(lw);
+  result.log_psi += log_count;
+  result.log_psi_laplace = laplace_log_mass(mix, used, N) - log_norm;
   result.map_failures = failures;
   result.wall_hits -= failures;
   result.status = mix.status;
   result.modes = std::move(mix.modes);
-  const auto best = std::max_element(
-      result.modes.begin(), result.modes.end(),
-      [](const WallMode& a, const WallMode& b) { return a.log_weight < b.log_weight; });
-  result.minimizer = best->minimizer;
+  result.minimizer = result.modes[best].minimizer;
   return result;
 }
 }  // namespace detail
@@ -381,20 +358,24 @@ PsiEstimate sample_with_walls(const Problem& problem, const Vec<Problem::kStateD
 /// density in closed form, so the modes cannot share samples as the linear mixture does).
 /// `references` (rewound, on the stream of `key` with purpose kReference) replays references
 /// drawn for an earlier estimate instead of drawing them again: the same numbers, faster.
+/// `walls` chooses how the modes draw samples (ModeSampling) and the paper's Laplace weights;
+/// the random map cannot take Laplace weights, and they need stratified modes (InvalidArgument).
 template <typename Problem>
-PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem::kStateDim>& x,
-                                      int k, int M, const StreamKey& key,
-                                      const Eigen::VectorXd& warm = {},
-                                      const MinimizeOptions& options = {},
-                                      SamplingMap map = SamplingMap::kLinear,
-                                      const std::vector<WallMode>* frozen = nullptr,
-                                      ReplayableNormals* references = nullptr) {
+PsiEstimate estimate_log_psi_implicit(
+    const Problem& problem, const Vec<Problem::kStateDim>& x, int k, int M, const StreamKey& key,
+    const Eigen::VectorXd& warm = {}, const MinimizeOptions& options = {},
+    SamplingMap map = SamplingMap::kLinear, const std::vector<WallMode>* frozen = nullptr,
+    ReplayableNormals* references = nullptr, const WallSampling& walls = {}) {
   constexpr int D = Problem::kStateDim;
   require(M >= 1, "path integral estimator: expected at least 1 sample, got {}", M);
+  require(!walls.laplace_weights ||
+              (map == SamplingMap::kLinear && walls.modes != ModeSampling::kMixture),
+          "path integral estimator: Laplace weights (the paper's estimator) need the linear map "
+          "and stratified modes (ModeSampling::kEachMode or kDominant)");
   const auto F = problem.path_function(x, k);
   const int N = F.num_blocks() * D;
   for (std::size_t j = 0; j < problem.walls().size(); ++j) {
-    if (problem.wall_step(j) == k && !problem.walls()[j].passes(x)) {
+    if (walls.test_start && problem.wall_step(j) == k && !problem.walls()[j].passes(x)) {
       PsiEstimate dead;  // at the wall, outside an opening: psi = 0
       dead.samples = M;
       dead.wall_hits = M;
@@ -411,21 +392,23 @@ PsiEstimate estimate_log_psi_implicit(const Problem& problem, const Vec<Problem:
   ReplayableNormals& refs = references ? *references : own;
   if (ahead.size() == 0)
     return detail::sample_without_walls(problem, F, start, M, refs, options, map);
-  return detail::sample_with_walls(problem, x, k, F, ahead, start, M, key, refs, options, map,
-                                   frozen);
+  return detail::sample_with_walls(problem, F, ahead, start, M, key, refs, options, map, frozen,
+                                   walls);
 }
 
 /// log psi_hat(x, t_k) by plain Monte Carlo: M forward-Euler paths, path j from stream
-/// (key.seed, key.step, key.index * M + j, kProposal). Hard walls zero the paths that miss them.
+/// (key.seed, key.step, key.index * M + j, kProposal). Hard walls zero the paths that miss them
+/// (a wall at t_k tests x unless `test_start` is false, as in WallSampling).
 template <typename Problem>
 PsiEstimate estimate_log_psi_monte_carlo(const Problem& problem, const Vec<Problem::kStateDim>& x,
-                                         int k, int M, const StreamKey& key) {
+                                         int k, int M, const StreamKey& key,
+                                         bool test_start = true) {
   constexpr int D = Problem::kStateDim;
   require(M >= 1, "path integral estimator: expected at least 1 path, got {}", M);
   const auto F = problem.path_function(x, k);  // validates k and x
   const int n = F.num_blocks();
-  const double dt = problem.dt(), g = problem.gamma();
-  const Mat<D> scale = problem.sigma_sqrt() * std::sqrt(dt);
+  const int* steps = problem.path_steps(k);
+  const double g = problem.gamma();
   std::vector<double> lw(static_cast<std::size_t>(M));
   Eigen::VectorXd path(n * D);
   const bool walled = !problem.walls().empty();
@@ -433,15 +416,20 @@ PsiEstimate estimate_log_psi_monte_carlo(const Problem& problem, const Vec<Probl
     Rng rng(
         {key.seed, key.step, key.index * static_cast<std::uint64_t>(M) + j, purpose::kProposal});
     Vec<D> y = x;
-    double cost = 0.5 * dt * problem.model().running_cost(y, problem.time(k));
-    for (int i = 1; i <= n; ++i) {
-      y = y + problem.model().drift(y, problem.time(k + i - 1)) * dt +
-          scale * rng.normal_vector<D>();
+    // Trapezoid rule for the running cost over the resolved times (dt on every step).
+    double cost = 0.0, before = 0.0;
+    for (int i = 1, from = k; i <= n; from = steps[i - 1], ++i) {
+      const double dt = (steps[i - 1] - from) * problem.dt();
+      cost += 0.5 * (before + dt) * problem.model().running_cost(y, problem.time(from));
+      y = y + problem.model().drift(y, problem.time(from)) * dt +
+          problem.sigma_sqrt() * std::sqrt(dt) * rng.normal_vector<D>();
       if (walled) path.template segment<D>((i - 1) * D) = y;
-      cost += (i == n ? 0.5 : 1.0) * dt * problem.model().running_cost(y, problem.time(k + i));
+      before = dt;
     }
+    cost += 0.5 * before * problem.model().running_cost(y, problem.time(steps[n - 1]));
     cost += problem.model().final_cost(y);
-    if (walled && !problem.passes_walls(x, k, path)) cost = std::numeric_limits<double>::infinity();
+    if (walled && !problem.passes_walls(x, k, path, test_start))
+      cost = std::numeric_limits<double>::infinity();
     lw[static_cast<std::size_t>(j)] =
         std::isfinite(cost) ? -cost / g : -std::numeric_limits<double>::infinity();
   }

@@ -42,8 +42,10 @@
 //
 // The pieces, one header each: problem.hpp (ControlSpec, HardWall, ControlProblem),
 // path_function.hpp (F and its derivatives), path_solvers.hpp (constrained Newton, the random
-// map's ray equation), wall_modes.hpp (the modes of hard walls), estimators.hpp (log psi by
-// implicit sampling or plain Monte Carlo), controller.hpp (the control and the closed loop).
+// map's ray equation), wall_modes.hpp (the modes of hard walls), wall_mixture.hpp (the mixture
+// over them), wall_values.hpp (linear-quadratic models: only the wall values are drawn),
+// estimators.hpp (log psi by implicit sampling or plain Monte Carlo), controller.hpp (the control
+// and the closed loop).
 
 #include "implicit/control/controller.hpp"
 #include "implicit/control/estimators.hpp"

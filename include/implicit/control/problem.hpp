@@ -26,6 +26,7 @@ struct ControlSpec {
   Mat<P> control_cost = Mat<P>::Identity();      ///< R (symmetric positive definite)
   double horizon = 1.0;                          ///< tf - t0
   double dt = 0.01;                              ///< time step; horizon must be a multiple
+  PathGrid path_grid = PathGrid::kEveryStep;     ///< where the path integral resolves the path
 };
 
 /// Checks the spec and condition (8); returns gamma and writes Sigma = G Q Q^T G^T. Throws
@@ -107,6 +108,7 @@ class ControlProblem {
 
  public:
   using PathFunction = control::PathFunction<D, ControlProblem>;
+  using ModelType = Model;
   static constexpr int kStateDim = D;
   static constexpr int kControlDim = P;
 
@@ -144,6 +146,14 @@ class ControlProblem {
       }
       wall_steps_.push_back(static_cast<int>(step));
     }
+    if (spec_.path_grid == PathGrid::kEveryStep) {
+      for (int i = 1; i <= num_steps_; ++i) nodes_.push_back(i);
+    } else {
+      nodes_ = wall_steps_;
+      nodes_.push_back(num_steps_);
+      std::sort(nodes_.begin(), nodes_.end());
+      nodes_.erase(std::unique(nodes_.begin(), nodes_.end()), nodes_.end());
+    }
   }
 
   const Model& model() const { return model_; }
@@ -157,13 +167,25 @@ class ControlProblem {
   /// The grid step of wall j.
   int wall_step(std::size_t j) const { return wall_steps_[j]; }
 
+  /// n: the number of resolved path points y_1..y_n after grid step k (K - k on every step).
+  int path_length(int k) const { return static_cast<int>(nodes_.end() - first_node(k)); }
+  /// The grid steps of y_1..y_n from step k (path_length(k) entries, increasing, the last is K).
+  const int* path_steps(int k) const { return nodes_.data() + (first_node(k) - nodes_.begin()); }
+  /// The 0-based block of the path from step k that holds the resolved grid step `step` > k.
+  int block_at_step(int k, int step) const {
+    const auto it = std::lower_bound(first_node(k), nodes_.end(), step);
+    return static_cast<int>(it - first_node(k));
+  }
+
   /// True if the path y_1..y_n from (x, t_k) passes every wall at or after t_k (walls at t_k test
-  /// x itself; earlier walls are behind and ignored).
-  bool passes_walls(const Vec<D>& x, int k, const Eigen::VectorXd& y) const {
+  /// x itself unless `test_start` is false; earlier walls are behind and ignored).
+  bool passes_walls(const Vec<D>& x, int k, const Eigen::VectorXd& y,
+                    bool test_start = true) const {
     for (std::size_t j = 0; j < walls_.size(); ++j) {
       const int w = wall_steps_[j] - k;
-      if (w < 0) continue;
-      const Vec<D> at = w == 0 ? x : Vec<D>(y.template segment<D>((w - 1) * D));
+      if (w < 0 || (w == 0 && !test_start)) continue;
+      const Vec<D> at =
+          w == 0 ? x : Vec<D>(y.template segment<D>(block_at_step(k, wall_steps_[j]) * D));
       if (!walls_[j].passes(at)) return false;
     }
     return true;
@@ -175,7 +197,7 @@ class ControlProblem {
     return gamma_ * llt.solve(spec_.G.transpose() * grad_log_psi);
   }
 
-  /// F over y_1..y_n (n = K - k) from y_0 = x at t_k: a banded target with D x D blocks.
+  /// F over y_1..y_n (n = path_length(k)) from y_0 = x at t_k: a banded target with D x D blocks.
   PathFunction path_function(const Vec<D>& x, int k) const {
     require(k >= 0 && k < num_steps_, "control problem: expected a step in [0, {}), got {}",
             num_steps_, k);
@@ -185,19 +207,28 @@ class ControlProblem {
 
   /// The noise-free forward-Euler path from (x, t_k): a start point for the minimiser.
   Eigen::VectorXd drift_path(const Vec<D>& x, int k) const {
-    const int n = num_steps_ - k;
+    const int n = path_length(k);
+    const int* steps = path_steps(k);
     Eigen::VectorXd y(n * D);
     Vec<D> cur = x;
-    for (int i = 1; i <= n; ++i) {
-      cur = cur + model_.drift(cur, time(k + i - 1)) * spec_.dt;
+    for (int i = 1, from = k; i <= n; from = steps[i - 1], ++i) {
+      cur = cur + model_.drift(cur, time(from)) * ((steps[i - 1] - from) * spec_.dt);
       y.template segment<D>((i - 1) * D) = cur;
     }
     return y;
   }
 
-  /// -log of the path-integral normaliser (2 pi dt)^{N/2} (det Sigma)^{n/2}, N = n D.
-  double log_normalizer(int n) const {
-    return 0.5 * n * D * (kLog2Pi + std::log(spec_.dt)) + 0.5 * n * log_det_sigma_;
+  /// log of the path-integral normaliser prod_i (2 pi dt_i)^{D/2} (det Sigma)^{1/2} over the
+  /// path from step k, dt_i the interval before y_i (dt on every step).
+  double path_log_normalizer(int k) const {
+    const int n = path_length(k);
+    if (spec_.path_grid == PathGrid::kEveryStep)
+      return 0.5 * n * D * (kLog2Pi + std::log(spec_.dt)) + 0.5 * n * log_det_sigma_;
+    double s = 0.5 * n * log_det_sigma_;
+    const int* steps = path_steps(k);
+    for (int i = 0, from = k; i < n; from = steps[i], ++i)
+      s += 0.5 * D * (kLog2Pi + std::log((steps[i] - from) * spec_.dt));
+    return s;
   }
 
   /// Lower Cholesky factor of Sigma (forward-Euler increments are sqrt(dt) Sigma^{1/2} w).
@@ -208,11 +239,16 @@ class ControlProblem {
   ControlSpec<D, P> spec_;
   std::vector<HardWall<D>> walls_;
   std::vector<int> wall_steps_;
+  std::vector<int> nodes_;  // the resolved grid steps 1..K (path_grid), increasing
   double gamma_ = 0.0;
   Mat<D> sigma_, sigma_inv_, sigma_sqrt_;
   Eigen::LLT<Mat<D>> sigma_llt_;
   double log_det_sigma_ = 0.0;
   int num_steps_ = 0;
+
+  std::vector<int>::const_iterator first_node(int k) const {
+    return std::upper_bound(nodes_.begin(), nodes_.end(), k);
+  }
 };
 
 }  // namespace implicit::control

@@ -44,11 +44,15 @@ struct WallsAhead {
   static constexpr int D = Problem::kStateDim;
   const Problem& problem;
   int k = 0;
-  std::vector<int> ahead;  ///< indices into problem.walls()
+  std::vector<int> ahead;   ///< indices into problem.walls()
+  std::vector<int> blocks;  ///< the path block of each wall ahead (looked up once: hot)
 
   WallsAhead(const Problem& p, int step) : problem(p), k(step) {
-    for (std::size_t j = 0; j < p.walls().size(); ++j)
-      if (p.wall_step(j) > k) ahead.push_back(static_cast<int>(j));
+    for (std::size_t j = 0; j < p.walls().size(); ++j) {
+      if (p.wall_step(j) <= k) continue;
+      ahead.push_back(static_cast<int>(j));
+      blocks.push_back(p.block_at_step(k, p.wall_step(j)));
+    }
   }
   int size() const { return static_cast<int>(ahead.size()); }
   const auto& wall(int i) const {
@@ -58,11 +62,15 @@ struct WallsAhead {
   const WallOpening& opening(int i, const WallMode& md) const {
     return wall(i).openings[static_cast<std::size_t>(md.openings[static_cast<std::size_t>(i)])];
   }
-  int block_of(int i) const {
-    return problem.wall_step(static_cast<std::size_t>(ahead[static_cast<std::size_t>(i)])) - k - 1;
-  }
+  int block_of(int i) const { return blocks[static_cast<std::size_t>(i)]; }
   double value(int i, const Eigen::VectorXd& v) const {
     return wall(i).direction.dot(v.template segment<D>(block_of(i) * D));
+  }
+  /// True if the path y passes every wall ahead (through any opening).
+  bool passes(const Eigen::VectorXd& y) const {
+    for (int i = 0; i < size(); ++i)
+      if (!wall(i).passes(y.template segment<D>(block_of(i) * D))) return false;
+    return true;
   }
 };
 
@@ -183,13 +191,14 @@ Eigen::VectorXd shifted_start(const WallsAhead<Problem>& w, const WallMode& md,
 
 /// The constrained minimum of mode `md`. Frozen: the wall values are held at md.wall_values
 /// from md.minimizer. Otherwise the active set from two starts, the free minimiser and its
-/// shifted copy (shifted_start); the lower constrained F wins. Updates md.clamped. An inexact
-/// centre costs efficiency only: the weights use the true F, so the estimator stays unbiased
-/// for any centre.
+/// shifted copy (shifted_start); the lower constrained F wins; a `convex` F needs only the
+/// first. Updates md.clamped. An inexact centre costs efficiency only: the weights use the true
+/// F, so the estimator stays unbiased for any centre.
 template <typename PathF, typename Problem>
 PathMinimum<PathF::Block> mode_minimum(const PathF& F, const WallsAhead<Problem>& w, WallMode& md,
                                        const Eigen::VectorXd& free_min, bool frozen,
-                                       const MinimizeOptions& options, PathConstraints& cons) {
+                                       const MinimizeOptions& options, PathConstraints& cons,
+                                       bool convex = false) {
   const int A = w.size();
   if (frozen) {
     reset_constraints(cons, md.minimizer.size(), A);
@@ -201,6 +210,7 @@ PathMinimum<PathF::Block> mode_minimum(const PathF& F, const WallsAhead<Problem>
   std::vector<int> clamped_free = md.clamped, clamped_start = md.clamped;
   auto r = active_set_search(F, w, md, free_min, clamped_free, options, cons);
   md.clamped = clamped_free;
+  if (convex) return r;
   const Eigen::VectorXd shifted = shifted_start(w, md, free_min);
   if ((shifted - free_min).cwiseAbs().maxCoeff() > 0.0) {
     auto other = active_set_search(F, w, md, shifted, clamped_start, options, cons);

@@ -42,6 +42,16 @@ double effective_sample_size(std::span<const double> normalized);
 /// Standard error of the mean of raw weights exp(l_i) relative to that mean: sd(w)/(sqrt(M) mean).
 double relative_standard_error(std::span<const double> log_weights);
 
+/// log_mean_exp, the ESS (sum w)^2 / sum w^2 and relative_standard_error of raw log-weights in one
+/// pass of exponentials (the other functions take one each: this is for hot loops). All -inf (or
+/// empty): log_mean = -inf, ess = 0, relative_se = +inf.
+struct WeightMoments {
+  double log_mean = -std::numeric_limits<double>::infinity();
+  double ess = 0.0;
+  double relative_se = std::numeric_limits<double>::infinity();
+};
+WeightMoments weight_moments(std::span<const double> log_weights);
+
 /// Weighted mean of the columns of `samples` (each column one sample).
 template <int N>
 Vec<N> weighted_mean(const Eigen::Matrix<double, N, Eigen::Dynamic>& samples,
