@@ -32,7 +32,7 @@ void setup_slit(CLI::App& sub) {
   sub.add_option("--estimator", cmd->settings.estimator,
                  "wall-space: the double slit's own estimator, which samples the wall value alone; "
                  "generic: the library's path integral estimator on the double slit as a "
-                 "ControlProblem (the same table within Monte Carlo error, slower)")
+                 "ControlProblem (the same runs to rounding, slower)")
       ->check(CLI::IsMember({"wall-space", "generic"}))
       ->capture_default_str();
   sub.add_option("--naive-small", cmd->settings.naive_mc_small,
