@@ -307,17 +307,9 @@ TEST(DoubleSlitGeneric, ControlAtTheWallIgnoresIt) {
 }
 
 namespace {
-// Declares itself linear-quadratic, but its end cost is quartic.
-struct WronglyDeclaredModel {
-  static constexpr bool kLinearQuadratic = true;
-  template <typename T>
-  Eigen::Matrix<T, 1, 1> drift(const Eigen::Matrix<T, 1, 1>& x, double) const {
-    return x * 0.0;
-  }
-  template <typename T>
-  T running_cost(const Eigen::Matrix<T, 1, 1>& x, double) const {
-    return x(0) * 0.0;
-  }
+// Declares itself linear-quadratic (inherited from FreeWalkerModel, with its zero drift and
+// running cost), but its end cost is quartic.
+struct WronglyDeclaredModel : FreeWalkerModel {
   template <typename T>
   T final_cost(const Eigen::Matrix<T, 1, 1>& x) const {
     return 0.25 * x(0) * x(0) * x(0) * x(0);
