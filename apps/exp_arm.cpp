@@ -8,17 +8,22 @@
 
 #include "experiments.hpp"
 #include "implicit/control/robot_arm.hpp"
+#include "implicit/core/error.hpp"
 
 namespace implicit::app {
 
-nlohmann::json run_arm(const ArmSettings&, const RunContext& ctx) {
+nlohmann::json run_arm(const ArmSettings& s, const RunContext& ctx) {
   const auto start = std::chrono::steady_clock::now();
+  require(s.estimator == "closed-form" || s.estimator == "generic",
+          "arm --estimator: expected 'closed-form' or 'generic', got '{}'", s.estimator);
+  const auto controller = s.estimator == "generic" ? control::ArmController::kGeneric
+                                                   : control::ArmController::kClosedForm;
   const control::ArmProblem problem;   // spec §2.5.4
   const control::ArmParameters plant;  // Table 3
   control::ArmParameters wrong = plant;
   wrong.m1 = 1.4;  // the controller believes the arm carries a payload
-  const auto exact = control::simulate_arm(problem, plant, plant);
-  const auto biased = control::simulate_arm(problem, plant, wrong);
+  const auto exact = control::simulate_arm(problem, plant, plant, 10, controller);
+  const auto biased = control::simulate_arm(problem, plant, wrong, 10, controller);
   control::ArmProblem semi = problem;
   semi.scheme = control::ArmScheme::kSemiImplicit;
   const auto semi_sim = control::simulate_arm(semi, plant, plant);
@@ -46,6 +51,7 @@ nlohmann::json run_arm(const ArmSettings&, const RunContext& ctx) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return {
+      {"estimator", s.estimator},
       {"lqr_max_abs_diff", std::max(exact.lqr_max_abs_diff, biased.lqr_max_abs_diff)},
       {"lqr_max_abs_diff_semi_implicit", semi_sim.lqr_max_abs_diff},
       {"final_angle_error_exact_rad", exact.final_angle_error},

@@ -1,10 +1,11 @@
 // Timing of path integral control: one control evaluation for the double slit (M = 50), the
-// robot arm (n = 200) and Himmelblau (M = 50), and the whole of Table 2 (4 x 500 closed-loop
-// runs, parallel over runs, through the experiment's aggregation in apps/slit_table.hpp); the
-// generic estimator with the random map and with a hard wall (mixture over the openings). Figures
-// are recorded in docs/performance.md.
+// robot arm (n = 200; closed form and generic) and Himmelblau (M = 50), and the whole of Table 2 (4
+// x 500 closed-loop runs, parallel over runs, through the experiment's aggregation in
+// apps/slit_table.hpp); the generic estimator with the random map and with a hard wall (mixture
+// over the openings). Figures are recorded in docs/performance.md.
 #include <benchmark/benchmark.h>
 
+#include <array>
 #include <vector>
 
 #include "implicit/control/double_slit.hpp"
@@ -39,6 +40,24 @@ void BM_ArmControl(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(arm_path_integral_control(x, 200, problem));
 }
 BENCHMARK(BM_ArmControl);
+
+// The same control from the generic estimator: each joint a ControlProblem with partial noise
+// (dense Hessian of the 200 velocities, central difference along G).
+void BM_ArmControlGeneric(benchmark::State& state) {
+  const ArmProblem problem;
+  const std::array<ArmJointProblem, 2> joints{arm_joint_problem(problem, 0),
+                                              arm_joint_problem(problem, 1)};
+  const implicit::Vec<4> x(0.2, -0.1, 0.3, -0.2);
+  EstimatorOptions o;
+  o.samples = 1;
+  for (auto _ : state)
+    for (int j = 0; j < 2; ++j)
+      benchmark::DoNotOptimize(estimate_control(joints[static_cast<std::size_t>(j)],
+                                                implicit::Vec<2>(x(j), x(2 + j)), 0, o,
+                                                {1, 0, static_cast<std::uint64_t>(j), 0})
+                                   .u);
+}
+BENCHMARK(BM_ArmControlGeneric);
 
 void BM_HimmelblauControl(benchmark::State& state) {
   const HimmelblauProblem pb;

@@ -8,6 +8,7 @@
 #include "implicit/control/estimators.hpp"
 #include "implicit/control/himmelblau.hpp"
 #include "implicit/control/normal_tail.hpp"
+#include "implicit/control/partial_noise.hpp"
 #include "implicit/control/path_function.hpp"
 #include "implicit/control/path_integral.hpp"
 #include "implicit/control/path_solvers.hpp"

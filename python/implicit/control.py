@@ -62,9 +62,14 @@ def double_slit(samples=50, runs=500, mode="corrected", seed=1, out=None, thread
                                      "" if out is None else str(out), int(threads)))
 
 
-def arm(seed=1, out=None, threads=0):
-    """The two-link robot arm against LQR (Figure 4); the dict of `implicit arm --json`."""
-    return _json(_implicit._run_arm(int(seed), "" if out is None else str(out), int(threads)))
+def arm(seed=1, out=None, threads=0, estimator="generic"):
+    """The two-link robot arm against LQR (Figure 4); the dict of `implicit arm --json`.
+
+    estimator: "generic" (the library's path integral estimator on each joint, a control problem
+    with partial noise) or "closed-form" (each joint's path integral in closed form, faster).
+    """
+    return _json(_implicit._run_arm(str(estimator), int(seed), "" if out is None else str(out),
+                                    int(threads)))
 
 
 def himmelblau(runs=70, samples=50, seed=1, out=None, threads=0):

@@ -126,10 +126,12 @@ void init_runs(py::module_& m) {
       py::arg("runs"), py::arg("samples"), py::arg("seed"), py::arg("out"), py::arg("threads"));
   m.def(
       "_run_arm",
-      [](std::uint64_t seed, const std::string& out, int threads) {
-        return run_json(app::ArmSettings{}, seed, out, threads, &app::run_arm);
+      [](const std::string& estimator, std::uint64_t seed, const std::string& out, int threads) {
+        app::ArmSettings s;
+        s.estimator = estimator;
+        return run_json(s, seed, out, threads, &app::run_arm);
       },
-      py::arg("seed"), py::arg("out"), py::arg("threads"));
+      py::arg("estimator"), py::arg("seed"), py::arg("out"), py::arg("threads"));
 }
 
 }  // namespace implicit::python

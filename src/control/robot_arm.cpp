@@ -1,9 +1,13 @@
 #include "implicit/control/robot_arm.hpp"
 
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <optional>
 
 #include <Eigen/Cholesky>
 
+#include "implicit/control/controller.hpp"
 #include "implicit/core/banded.hpp"
 #include "implicit/core/error.hpp"
 
@@ -156,12 +160,57 @@ JointRiccati joint_riccati(double target, int n, const ArmProblem& problem) {
   return ric;
 }
 
+ArmJointProblem arm_joint_problem(const ArmProblem& problem, int joint) {
+  problem.validate();
+  require(joint == 0 || joint == 1, "arm joint problem: expected joint 0 or 1, got {}", joint);
+  require(problem.scheme == ArmScheme::kExplicit,
+          "arm joint problem: the generic problem integrates the angle by forward Euler (the "
+          "explicit scheme); the semi-implicit scheme needs the closed form");
+  ControlSpec<2, 1> spec;
+  spec.G << 0.0, 1.0;
+  spec.noise_covariance(0, 0) = problem.sigma;
+  spec.control_cost(0, 0) = problem.control_cost;
+  spec.horizon = problem.num_steps() * problem.dt;  // an exact multiple of dt
+  spec.dt = problem.dt;
+  return ArmJointProblem(ArmJointModel{problem.target(joint)}, spec);
+}
+
+namespace {
+// Both joints' controls from the generic estimator: F is quadratic, so the estimate is the
+// Laplace value (no sampling) and u its central difference along the velocity.
+class GenericArmControl {
+ public:
+  explicit GenericArmControl(const ArmProblem& p)
+      : joints_{arm_joint_problem(p, 0), arm_joint_problem(p, 1)} {
+    options_.samples = 1;
+  }
+  Vec<2> operator()(const Vec<4>& x, int k) const {
+    Vec<2> u;
+    for (int j = 0; j < 2; ++j) {
+      const auto& pj = joints_[static_cast<std::size_t>(j)];
+      const auto c =
+          estimate_control(pj, Vec<2>(x(j), x(2 + j)), k, options_,
+                           {0, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(j), 0});
+      require(c.defined, "arm simulation: the generic estimator gave no control at step {}", k);
+      u(j) = c.u(0);
+    }
+    return u;
+  }
+
+ private:
+  std::array<ArmJointProblem, 2> joints_;
+  EstimatorOptions options_;
+};
+}  // namespace
+
 ArmSimulation simulate_arm(const ArmProblem& problem, const ArmParameters& plant,
-                           const ArmParameters& model, int substeps) {
+                           const ArmParameters& model, int substeps, ArmController controller) {
   problem.validate();
   plant.validate();
   model.validate();
   require(substeps >= 1, "arm simulation: expected at least 1 RK4 substep, got {}", substeps);
+  std::optional<GenericArmControl> generic;
+  if (controller == ArmController::kGeneric) generic.emplace(problem);
   const int K = problem.num_steps();
   const double dt = problem.dt, r = problem.control_cost;
   std::array<JointRiccati, 2> ric{joint_riccati(problem.target(0), K, problem),
@@ -175,7 +224,7 @@ ArmSimulation simulate_arm(const ArmProblem& problem, const ArmParameters& plant
   for (int k = 0; k <= K; ++k) sim.t[k] = k * dt;
   for (int k = 0; k < K; ++k) {
     const Vec<4>& x = sim.x[k];
-    const Vec<2> u = arm_path_integral_control(x, K - k, problem);
+    const Vec<2> u = generic ? (*generic)(x, k) : arm_path_integral_control(x, K - k, problem);
     for (int j = 0; j < 2; ++j) {
       const Vec<2> xj(x(j), x(2 + j));
       // Explicit scheme: u_PI = -(1/r) dV0/dy; semi-implicit: u_PI = first LQR control.

@@ -22,16 +22,17 @@ struct ControlEstimate {
   Vec<P> u = Vec<P>::Zero();
   PsiEstimate psi;        ///< at x
   bool defined = true;    ///< false if u could not be estimated (see fallback)
-  bool fallback = false;  ///< log psi_hat was -inf at x or some x +- h e_i: u is the Laplace one
+  bool fallback = false;  ///< log psi_hat was -inf at x or some x +- s g_j: u is the Laplace one
   MinimizeStatus worst_status = MinimizeStatus::kConverged;
 };
 
-/// u = gamma R^-1 G^T grad log psi_hat by central differences with common random numbers: the
-/// same reference variables at x + h e_i and x - h e_i, minimisers warm-started at mu(x). `warm`
+/// u = gamma R^-1 G^T grad log psi_hat by central differences along the columns g_j of G with
+/// common random numbers: the same reference variables at x + s g_j and x - s g_j (s |g_j| = h),
+/// minimisers warm-started at mu(x). `warm`
 /// (a path y_1..y_n, e.g. the previous step's minimiser shifted by one step) starts the
 /// minimisation at x; empty: the drift path. A wall at t_k is behind the control (it moves only
 /// the states after t_k): the estimates ignore it (WallSampling::test_start). When no sample passes
-/// at x or at some x +- h e_i, u differentiates the Laplace approximation of psi instead
+/// at x or at some x +- s g_j, u differentiates the Laplace approximation of psi instead
 /// (o.laplace_fallback; `fallback`), or is left undefined (`defined` false).
 template <typename Problem>
 ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
@@ -41,7 +42,7 @@ ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
                                                        const Eigen::VectorXd& warm = {}) {
   constexpr int D = Problem::kStateDim;
   const std::vector<WallMode>* frozen = nullptr;
-  // The references are drawn once, at x, and replayed at every x +- h e_i.
+  // The references are drawn once, at x, and replayed at every x +- s g_j.
   ReplayableNormals references({key.seed, key.step, key.index, purpose::kReference});
   auto psi = [&](const Vec<D>& xp, const Eigen::VectorXd& start) {
     references.rewind();
@@ -55,27 +56,32 @@ ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
   if (o.freeze_walls && !c.psi.modes.empty()) frozen = &c.psi.modes;
   c.worst_status = c.psi.status;
   const double h = o.fd_step * (o.relative_fd_step ? std::max(1.0, x.cwiseAbs().maxCoeff()) : 1.0);
-  Vec<D> grad = Vec<D>::Zero(), laplace = Vec<D>::Zero();
+  // u needs G^T grad log psi only: one central difference along each column g_j of G (a step h
+  // long), not along every state coordinate; with partial noise or P < D that is fewer estimates.
+  constexpr int P = Problem::kControlDim;
+  Vec<P> slope = Vec<P>::Zero(), laplace = Vec<P>::Zero();
   bool sampled = std::isfinite(c.psi.log_psi), laplace_ok = true;
-  for (int i = 0; i < D; ++i) {
-    Vec<D> xp = x, xm = x;
-    xp(i) += h;
-    xm(i) -= h;
+  for (int j = 0; j < P; ++j) {
+    const Vec<D> g = problem.spec().G.col(j);
+    const double norm = g.norm();
+    if (norm == 0.0) continue;  // control j moves nothing: its slope is zero
+    const double s = h / norm;
+    const Vec<D> xp = x + s * g, xm = x - s * g;
     const auto ep = psi(xp, c.psi.minimizer), em = psi(xm, c.psi.minimizer);
     if (ep.status != MinimizeStatus::kConverged) c.worst_status = ep.status;
     if (em.status != MinimizeStatus::kConverged) c.worst_status = em.status;
     sampled = sampled && std::isfinite(ep.log_psi) && std::isfinite(em.log_psi);
-    grad(i) = (ep.log_psi - em.log_psi) / (2.0 * h);
+    slope(j) = (ep.log_psi - em.log_psi) / (2.0 * s);
     laplace_ok =
         laplace_ok && std::isfinite(ep.log_psi_laplace) && std::isfinite(em.log_psi_laplace);
-    laplace(i) = (ep.log_psi_laplace - em.log_psi_laplace) / (2.0 * h);
+    laplace(j) = (ep.log_psi_laplace - em.log_psi_laplace) / (2.0 * s);
   }
   if (!sampled) {
     c.fallback = o.laplace_fallback && laplace_ok;
     c.defined = c.fallback;
-    grad = c.fallback ? laplace : Vec<D>::Zero();
+    slope = c.fallback ? laplace : Vec<P>::Zero();
   }
-  c.u = problem.control_from_gradient(grad);
+  c.u = problem.control_from_slopes(slope);
   return c;
 }
 

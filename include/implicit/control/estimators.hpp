@@ -123,9 +123,8 @@ template <typename Problem, typename PathF>
 PsiEstimate sample_without_walls(const Problem& problem, const PathF& F,
                                  const Eigen::VectorXd& start, int M, ReplayableNormals& refs,
                                  const MinimizeOptions& options, SamplingMap map) {
-  constexpr int D = Problem::kStateDim;
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
-  const int n = F.num_blocks(), N = n * D;
+  const int N = F.dimension();
   auto r = minimize_path(F, start, options);
   if (r.status == MinimizeStatus::kNonFinite || !r.factor_ok) {
     PsiEstimate dead;  // psi = 0: every sample has zero weight
@@ -373,7 +372,7 @@ PsiEstimate estimate_log_psi_implicit(
           "path integral estimator: Laplace weights (the paper's estimator) need the linear map "
           "and stratified modes (ModeSampling::kEachMode or kDominant)");
   const auto F = problem.path_function(x, k);
-  const int N = F.num_blocks() * D;
+  const int N = F.dimension();
   for (std::size_t j = 0; j < problem.walls().size(); ++j) {
     if (walls.test_start && problem.wall_step(j) == k && !problem.walls()[j].passes(x)) {
       PsiEstimate dead;  // at the wall, outside an opening: psi = 0
@@ -384,16 +383,20 @@ PsiEstimate estimate_log_psi_implicit(
   }
   const detail::WallsAhead<Problem> ahead(problem, k);
   require(warm.size() == 0 || warm.size() == N,
-          "path integral estimator: expected a warm start of {} entries ({} steps of {} states) "
-          "or none, got {}",
-          N, F.num_blocks(), D, warm.size());
+          "path integral estimator: expected a warm start of {} entries ({} steps of {} path "
+          "coordinates) or none, got {}",
+          N, F.num_blocks(), Problem::kNoisyDim, warm.size());
   const Eigen::VectorXd start = warm.size() == N ? warm : problem.drift_path(x, k);
   ReplayableNormals own({key.seed, key.step, key.index, purpose::kReference}, 0);
   ReplayableNormals& refs = references ? *references : own;
-  if (ahead.size() == 0)
+  if constexpr (Problem::kNoisyDim < D) {  // no walls with partial noise (the constructor's check)
     return detail::sample_without_walls(problem, F, start, M, refs, options, map);
-  return detail::sample_with_walls(problem, F, ahead, start, M, key, refs, options, map, frozen,
-                                   walls);
+  } else {
+    if (ahead.size() == 0)
+      return detail::sample_without_walls(problem, F, start, M, refs, options, map);
+    return detail::sample_with_walls(problem, F, ahead, start, M, key, refs, options, map, frozen,
+                                     walls);
+  }
 }
 
 /// log psi_hat(x, t_k) by plain Monte Carlo: M forward-Euler paths, path j from stream

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "implicit/core/banded.hpp"
+#include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/jet.hpp"
 #include "implicit/core/types.hpp"
 
@@ -33,6 +34,7 @@ template <int D, typename Problem>
 class PathFunction {
  public:
   static constexpr int Block = D;
+  using Factor = BandedFactor<D>;  ///< the Hessian's factor model (core/gaussian_factor.hpp)
   PathFunction(const Problem* p, const Vec<D>& x, int k)
       : p_(p),
         x_(x),
@@ -44,6 +46,7 @@ class PathFunction {
         share_(1.0 * dt_ / p->gamma_),
         share_last_(0.5 * dt_ / p->gamma_) {}
   int num_blocks() const { return n_; }
+  int dimension() const { return n_ * D; }
   const Vec<D>& start() const { return x_; }
   int start_step() const { return k_; }  ///< k: y_0 = x at t_k
 

@@ -56,12 +56,13 @@ void set_constraint(PathConstraints& c, int j, int block, const Vec<D>& a, doubl
 }
 
 /// min F(y) subject to `constraints` (none: unconstrained) from x0, by the kernel's damped
-/// Newton with the banded factor (range-space steps with constraints).
+/// Newton with the path function's factor model (banded with noise on every coordinate, dense
+/// with partial noise; range-space steps with constraints).
 template <typename PathF>
-PathMinimum<PathF::Block> minimize_path(const PathF& f, const Eigen::VectorXd& x0,
-                                        const MinimizeOptions& options,
-                                        const PathConstraints* constraints = nullptr) {
-  return newton_minimize<BandedFactor<PathF::Block>>(f, x0, NewtonOptions(options), constraints);
+NewtonMinimum<typename PathF::Factor> minimize_path(const PathF& f, const Eigen::VectorXd& x0,
+                                                    const MinimizeOptions& options,
+                                                    const PathConstraints* constraints = nullptr) {
+  return newton_minimize<typename PathF::Factor>(f, x0, NewtonOptions(options), constraints);
 }
 
 /// F along a ray, +inf where `inside(lambda)` is false (one mode's openings).

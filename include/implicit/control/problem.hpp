@@ -1,17 +1,21 @@
 #pragma once
 // The generic path integral control problem: the linear parts (G, Q Q^T, R, horizon, dt) with
 // condition (8), hard walls, and ControlProblem, which binds a user's model to them. See
-// path_integral.hpp for the whole picture and an example.
+// path_integral.hpp for the whole picture and an example. With partial noise (the last Dv < D
+// coordinates noisy, e.g. velocities driven by forces) the path integral runs over the noisy
+// coordinates only (partial_noise.hpp).
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 
+#include "implicit/control/partial_noise.hpp"
 #include "implicit/control/path_function.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/types.hpp"
@@ -31,9 +35,11 @@ struct ControlSpec {
 
 /// Checks the spec and condition (8); returns gamma and writes Sigma = G Q Q^T G^T. Throws
 /// InvalidArgument naming the problem (dt, horizon, R, Q Q^T, the mismatching entry of (8), or a
-/// singular Sigma).
+/// singular Sigma). With `noise_free` > 0 the first `noise_free` rows of G must be zero and Sigma
+/// is checked on the remaining (noisy) coordinates only.
 template <int D, int P>
-double check_control_spec(const ControlSpec<D, P>& s, Mat<D>* sigma_out = nullptr) {
+double check_control_spec(const ControlSpec<D, P>& s, Mat<D>* sigma_out = nullptr,
+                          int noise_free = 0) {
   require(std::isfinite(s.dt) && s.dt > 0.0, "control problem: expected dt > 0, got {}", s.dt);
   const double steps = s.horizon / s.dt;
   require(
@@ -71,10 +77,27 @@ double check_control_spec(const ControlSpec<D, P>& s, Mat<D>* sigma_out = nullpt
           "best gamma = {}, entry ({}, {}) is {} on the left and {} on the right (choose R "
           "proportional to (Q Q^T)^-1 on the controlled subspace)",
           gamma, i, j, gamma * A(i, j), B(i, j));
-  const Eigen::LLT<Mat<D>> s_llt(B);
+  if (noise_free > 0) {
+    const double g_top = s.G.topRows(noise_free).cwiseAbs().maxCoeff();
+    require(g_top == 0.0,
+            "control problem: with partial noise the first {} (noise-free) rows of G must be zero, "
+            "but an entry is {}",
+            noise_free, g_top);
+  }
+  const int noisy = D - noise_free;
+  // The noise-free rows and columns of Sigma are zero (G's are): an identity there leaves a
+  // matrix that is SPD exactly when Sigma is on the noisy coordinates.
+  Mat<D> padded = B;
+  padded.topLeftCorner(noise_free, noise_free).setIdentity();
+  const Eigen::LLT<Mat<D>> s_llt(padded);
+  require(s_llt.info() == Eigen::Success || noise_free == 0,
+          "control problem: the noise covariance Sigma = G Q Q^T G^T is singular on the noisy "
+          "coordinates (the last {} of the state)",
+          noisy);
   require(s_llt.info() == Eigen::Success,
           "control problem: the noise covariance Sigma = G Q Q^T G^T is singular (noise acts on a "
-          "subspace only); integrate over the noisy coordinates as in robot_arm.hpp");
+          "subspace only); order the state with the noise-free coordinates first and declare the "
+          "number Dv of noisy ones, ControlProblem<D, P, Model, Dv> (partial_noise.hpp)");
   if (sigma_out) *sigma_out = B;
   return gamma;
 }
@@ -101,28 +124,50 @@ struct HardWall {
   }
 };
 
-template <int D, int P, typename Model>
+/// Dv: the number of noisy coordinates, the last Dv of the state (D: all of them). With Dv < D
+/// the first D - Dv rows of G must be zero, the path integral runs over the noisy coordinates
+/// (partial_noise.hpp) and hard walls and PathGrid::kWallsAndHorizon are not available.
+template <int D, int P, typename Model, int Dv = D>
 class ControlProblem {
-  // F is a class of its own (path_function.hpp); it reads the model and Sigma^-1 directly.
+  static_assert(Dv >= 1 && Dv <= D, "ControlProblem: expected 1 <= Dv <= D noisy coordinates");
+  // F is a class of its own (path_function.hpp, partial_noise.hpp); it reads the model and
+  // Sigma^-1 directly.
   friend class control::PathFunction<D, ControlProblem>;
+  friend class control::PartialNoisePathFunction<D, Dv, ControlProblem>;
 
  public:
-  using PathFunction = control::PathFunction<D, ControlProblem>;
+  using PathFunction = std::conditional_t<Dv == D, control::PathFunction<D, ControlProblem>,
+                                          control::PartialNoisePathFunction<D, Dv, ControlProblem>>;
   using ModelType = Model;
   static constexpr int kStateDim = D;
   static constexpr int kControlDim = P;
+  static constexpr int kNoisyDim = Dv;  ///< path entries per resolved time
 
   /// Throws InvalidArgument for a bad spec (see check_control_spec) or a bad wall (time not a
   /// grid time in (0, horizon], zero or non-finite direction, no openings, openings empty,
   /// unsorted or overlapping).
   ControlProblem(Model model, const ControlSpec<D, P>& spec, std::vector<HardWall<D>> walls = {})
       : model_(std::move(model)), spec_(spec), walls_(std::move(walls)) {
-    gamma_ = check_control_spec(spec_, &sigma_);
-    sigma_llt_.compute(sigma_);
-    sigma_inv_ = sigma_llt_.solve(Mat<D>::Identity());
-    sigma_sqrt_ = sigma_llt_.matrixL();
-    log_det_sigma_ = 2.0 * sigma_sqrt_.diagonal().array().log().sum();
+    gamma_ = check_control_spec(spec_, &sigma_, D - Dv);
+    const Mat<Dv> noisy = sigma_.template bottomRightCorner<Dv, Dv>();
+    Eigen::LLT<Mat<Dv>> noisy_llt;
+    noisy_llt.compute(noisy);
+    noise_inv_ = noisy_llt.solve(Mat<Dv>::Identity());
+    const Mat<Dv> root = noisy_llt.matrixL();
+    sigma_sqrt_.setZero();  // zero rows and columns for the noise-free coordinates
+    sigma_sqrt_.template bottomRightCorner<Dv, Dv>() = root;
+    if constexpr (Dv == D) sigma_inv_ = noise_inv_;
+    log_det_sigma_ = 2.0 * root.diagonal().array().log().sum();
     num_steps_ = static_cast<int>(std::round(spec_.horizon / spec_.dt));
+    if constexpr (Dv < D) {
+      require(walls_.empty(),
+              "control problem: hard walls need noise on every coordinate (Dv = D), got {} walls "
+              "with {} of {} coordinates noisy",
+              walls_.size(), Dv, D);
+      require(spec_.path_grid == PathGrid::kEveryStep,
+              "control problem: with partial noise the path must be resolved at every step "
+              "(PathGrid::kEveryStep): the noise-free coordinates integrate the noisy ones");
+    }
     for (std::size_t j = 0; j < walls_.size(); ++j) {
       const auto& w = walls_[j];
       const double r = w.time / spec_.dt, step = std::round(r);
@@ -193,8 +238,12 @@ class ControlProblem {
 
   /// u = gamma R^-1 G^T grad log psi.
   Vec<P> control_from_gradient(const Vec<D>& grad_log_psi) const {
+    return control_from_slopes(spec_.G.transpose() * grad_log_psi);
+  }
+  /// u = gamma R^-1 s from the slopes s_j = g_j^T grad log psi along the columns of G.
+  Vec<P> control_from_slopes(const Vec<P>& slopes) const {
     const Eigen::LLT<Mat<P>> llt(spec_.control_cost);
-    return gamma_ * llt.solve(spec_.G.transpose() * grad_log_psi);
+    return gamma_ * llt.solve(slopes);
   }
 
   /// F over y_1..y_n (n = path_length(k)) from y_0 = x at t_k: a banded target with D x D blocks.
@@ -205,33 +254,36 @@ class ControlProblem {
     return PathFunction(this, x, k);
   }
 
-  /// The noise-free forward-Euler path from (x, t_k): a start point for the minimiser.
+  /// The noise-free forward-Euler path from (x, t_k): a start point for the minimiser (its
+  /// noisy coordinates only with partial noise).
   Eigen::VectorXd drift_path(const Vec<D>& x, int k) const {
     const int n = path_length(k);
     const int* steps = path_steps(k);
-    Eigen::VectorXd y(n * D);
+    Eigen::VectorXd y(n * Dv);
     Vec<D> cur = x;
     for (int i = 1, from = k; i <= n; from = steps[i - 1], ++i) {
       cur = cur + model_.drift(cur, time(from)) * ((steps[i - 1] - from) * spec_.dt);
-      y.template segment<D>((i - 1) * D) = cur;
+      y.template segment<Dv>((i - 1) * Dv) = cur.template tail<Dv>();
     }
     return y;
   }
 
-  /// log of the path-integral normaliser prod_i (2 pi dt_i)^{D/2} (det Sigma)^{1/2} over the
-  /// path from step k, dt_i the interval before y_i (dt on every step).
+  /// log of the path-integral normaliser prod_i (2 pi dt_i)^{Dv/2} (det Sigma)^{1/2} over the
+  /// path from step k, dt_i the interval before y_i (dt on every step); Sigma on the noisy
+  /// coordinates.
   double path_log_normalizer(int k) const {
     const int n = path_length(k);
     if (spec_.path_grid == PathGrid::kEveryStep)
-      return 0.5 * n * D * (kLog2Pi + std::log(spec_.dt)) + 0.5 * n * log_det_sigma_;
+      return 0.5 * n * Dv * (kLog2Pi + std::log(spec_.dt)) + 0.5 * n * log_det_sigma_;
     double s = 0.5 * n * log_det_sigma_;
     const int* steps = path_steps(k);
     for (int i = 0, from = k; i < n; from = steps[i], ++i)
-      s += 0.5 * D * (kLog2Pi + std::log((steps[i] - from) * spec_.dt));
+      s += 0.5 * Dv * (kLog2Pi + std::log((steps[i] - from) * spec_.dt));
     return s;
   }
 
-  /// Lower Cholesky factor of Sigma (forward-Euler increments are sqrt(dt) Sigma^{1/2} w).
+  /// Lower Cholesky factor of Sigma (forward-Euler increments are sqrt(dt) Sigma^{1/2} w); zero
+  /// on the noise-free coordinates.
   const Mat<D>& sigma_sqrt() const { return sigma_sqrt_; }
 
  private:
@@ -241,8 +293,8 @@ class ControlProblem {
   std::vector<int> wall_steps_;
   std::vector<int> nodes_;  // the resolved grid steps 1..K (path_grid), increasing
   double gamma_ = 0.0;
-  Mat<D> sigma_, sigma_inv_, sigma_sqrt_;
-  Eigen::LLT<Mat<D>> sigma_llt_;
+  Mat<D> sigma_, sigma_inv_ = Mat<D>::Zero(), sigma_sqrt_;
+  Mat<Dv> noise_inv_;  // Sigma^-1 on the noisy coordinates
   double log_det_sigma_ = 0.0;
   int num_steps_ = 0;
 

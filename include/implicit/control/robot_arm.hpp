@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 
+#include "implicit/control/problem.hpp"
 #include "implicit/core/types.hpp"
 
 namespace implicit::control {
@@ -108,6 +109,40 @@ struct JointRiccati {
 };
 JointRiccati joint_riccati(double target, int n, const ArmProblem& problem);
 
+/// One joint after inverse dynamics as a generic control problem with partial noise (state
+/// (angle, velocity), noise and control on the velocity): d z = v dt, d v = u dt + q dW, no
+/// running cost, final cost ((z - target)^2 + v^2) / 2. Its path function is exactly the one
+/// joint_path_integral minimises in closed form (explicit scheme).
+struct ArmJointModel {
+  double target = 0.0;  ///< theta* of this joint [rad]
+  static constexpr bool kLinearQuadratic = true;
+  template <typename T>
+  Eigen::Matrix<T, 2, 1> drift(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    return Eigen::Matrix<T, 2, 1>(x(1), x(1) * 0.0);
+  }
+  template <typename T>
+  T running_cost(const Eigen::Matrix<T, 2, 1>& x, double) const {
+    return x(0) * 0.0;
+  }
+  template <typename T>
+  T final_cost(const Eigen::Matrix<T, 2, 1>& x) const {
+    const T e = x(0) - target;
+    return 0.5 * (e * e + x(1) * x(1));
+  }
+};
+using ArmJointProblem = ControlProblem<2, 1, ArmJointModel, 1>;
+
+/// Joint `joint` (0 or 1) of `problem` as a generic problem: G = (0, 1)^T, Q Q^T = q^2, R = r,
+/// horizon tf, step dt. Throws InvalidArgument for a bad problem or joint, and for the
+/// semi-implicit scheme, which is not a forward-Euler path.
+ArmJointProblem arm_joint_problem(const ArmProblem& problem, int joint);
+
+/// Which estimator gives the arm's control.
+enum class ArmController {
+  kClosedForm,  ///< joint_path_integral: O(n) per joint (the default)
+  kGeneric,     ///< estimate_control on arm_joint_problem (partial noise, dense factor)
+};
+
 /// One closed-loop simulation of spec §2.5.6 (no noise, RK4 plant with 10 substeps).
 struct ArmSimulation {
   std::vector<double> t;           ///< K + 1 times
@@ -118,7 +153,9 @@ struct ArmSimulation {
   double final_angle_error = 0.0;  ///< |theta(tf) - theta*|
 };
 /// `plant`: the true arm; `model`: the controller's parameters for inverse dynamics.
+/// `controller`: kGeneric needs the explicit scheme.
 ArmSimulation simulate_arm(const ArmProblem& problem, const ArmParameters& plant,
-                           const ArmParameters& model, int substeps = 10);
+                           const ArmParameters& model, int substeps = 10,
+                           ArmController controller = ArmController::kClosedForm);
 
 }  // namespace implicit::control
