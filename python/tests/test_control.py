@@ -50,3 +50,9 @@ def test_control_runs_equal_the_cli_json(cli):
     c = cli("slit", "--samples", "10", "--runs", "4", "--seed", "2")
     for key in ("error_x_mean", "error_u_mean"):
         assert r[key] == c[key], key
+    for estimator in ("generic", "closed-form"):
+        r = implicit.control.arm(estimator=estimator)
+        c = cli("arm", "--estimator", estimator)
+        assert r["estimator"] == c["estimator"] == estimator
+        assert r["lqr_max_abs_diff"] == c["lqr_max_abs_diff"]
+        assert r["lqr_max_abs_diff"] < 1e-7  # generic: a central difference of the exact log psi
