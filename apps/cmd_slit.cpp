@@ -30,10 +30,10 @@ void setup_slit(CLI::App& sub) {
       ->check(CLI::IsMember({"paper", "corrected", "plain"}))
       ->capture_default_str();
   sub.add_option("--estimator", cmd->settings.estimator,
-                 "wall-space: the double slit's own estimator, which samples the wall value alone; "
                  "generic: the library's path integral estimator on the double slit as a "
-                 "ControlProblem (the same runs to rounding, slower)")
-      ->check(CLI::IsMember({"wall-space", "generic"}))
+                 "ControlProblem; wall-space: the double slit's own estimator, which samples the "
+                 "wall value alone (the same runs to rounding, faster)")
+      ->check(CLI::IsMember({"generic", "wall-space"}))
       ->capture_default_str();
   sub.add_option("--naive-small", cmd->settings.naive_mc_small,
                  "Plain Monte Carlo walks written for Figure 1")

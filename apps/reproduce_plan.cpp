@@ -17,6 +17,7 @@ json to_json(const SlitSettings& s) {
   return {{"samples", s.samples},
           {"runs", s.runs},
           {"mode", s.mode},
+          {"estimator", s.estimator},
           {"naive_mc_small", s.naive_mc_small},
           {"naive_mc_large", s.naive_mc_large}};
 }

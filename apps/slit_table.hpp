@@ -48,7 +48,7 @@ struct SlitTableOptions {
   int runs = 500;
   control::SlitEstimator estimator = control::SlitEstimator::kFrozenWall;
   std::uint64_t seed = 1;
-  SlitImplementation implementation = SlitImplementation::kWallSpace;
+  SlitImplementation implementation = SlitImplementation::kGeneric;
   control::SlitSampling sampling = control::SlitSampling::kWall;  ///< of kWallSpace
 };
 

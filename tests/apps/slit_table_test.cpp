@@ -90,9 +90,10 @@ TEST(SlitTable2Reduced, GenericEstimatorIsTheWallSpaceEstimator) {
     o.runs = 24;
     o.estimator = e;
     o.seed = 2025;
-    const auto wall = run_slit_table(DoubleSlit{}, o);
-    o.implementation = SlitImplementation::kGeneric;
+    EXPECT_EQ(o.implementation, SlitImplementation::kGeneric);  // the default
     const auto generic = run_slit_table(DoubleSlit{}, o);
+    o.implementation = SlitImplementation::kWallSpace;
+    const auto wall = run_slit_table(DoubleSlit{}, o);
     ASSERT_EQ(wall.runs.size(), generic.runs.size());
     for (std::size_t r = 0; r < wall.runs.size(); ++r) {
       EXPECT_NEAR(generic.runs[r].error_u, wall.runs[r].error_u, 1e-9 * wall.runs[r].error_u);
