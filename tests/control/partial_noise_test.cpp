@@ -168,6 +168,31 @@ TEST(PartialNoise, GenericArmSimulationMatchesTheClosedForm) {
   EXPECT_THROW(simulate_arm(arm, plant, plant, 10, ArmController::kGeneric), InvalidArgument);
 }
 
+// The noisy closed loop: the control at every visited state is LQR's (the noise enters the
+// velocity only, through Sigma's root), and each step starts from the last minimiser's tail.
+TEST(PartialNoise, ClosedLoopControlIsLqrAtEveryVisitedState) {
+  ArmProblem arm;
+  arm.final_time = 0.4;
+  const int K = arm.num_steps();
+  const auto pj = arm_joint_problem(arm, 1);
+  const auto ric = joint_riccati(arm.target(1), K, arm);
+  Eigen::MatrixXd noise(2, K);
+  for (int k = 0; k < K; ++k) noise.col(k) << 10.0, std::sin(1.3 * k);  // no noise on the angle
+  EstimatorOptions o;
+  o.samples = 1;
+  const auto run = simulate_closed_loop(pj, Vec<2>(0.1, -0.2), noise, o, 3);
+  ASSERT_EQ(static_cast<int>(run.u.size()), K);
+  for (int k = 0; k < K; ++k) {
+    const Vec<2>& x = run.x[static_cast<std::size_t>(k)];
+    EXPECT_NEAR(run.u[static_cast<std::size_t>(k)](0),
+                -(ric.P[k] * x + ric.q[k])(1) / arm.control_cost, 1e-7)
+        << k;
+    // The angle moved by the drift alone: the angle's noise entry had no effect.
+    EXPECT_DOUBLE_EQ(run.x[static_cast<std::size_t>(k) + 1](0), x(0) + arm.dt * x(1));
+    EXPECT_EQ(run.psi[static_cast<std::size_t>(k)].minimizer.size(), K - k);
+  }
+}
+
 // Central differences of F's gradient (and of the gradient for the Hessian), with the step and
 // tolerance of a second-order difference: error h^2 |F'''| plus rounding eps |F| / h.
 template <typename Problem>

@@ -115,9 +115,11 @@ ClosedLoopResult<Problem> simulate_closed_loop(const Problem& problem,
     const auto c = estimate_control(problem, r.x.back(), k, o,
                                     {seed, run, static_cast<std::uint64_t>(k), 0}, warm);
     // The path from step k + 1 is the tail of the path from step k (without y_1 when it sat at
-    // step k + 1: always on every step, only at a wall or the horizon otherwise).
-    const Eigen::Index rest = static_cast<Eigen::Index>(problem.path_length(k + 1)) * D;
-    warm = c.psi.minimizer.size() == static_cast<Eigen::Index>(problem.path_length(k)) * D
+    // step k + 1: always on every step, only at a wall or the horizon otherwise). A path entry
+    // holds the noisy coordinates only (all D of them unless the noise is partial).
+    constexpr int B = Problem::kNoisyDim;
+    const Eigen::Index rest = static_cast<Eigen::Index>(problem.path_length(k + 1)) * B;
+    warm = c.psi.minimizer.size() == static_cast<Eigen::Index>(problem.path_length(k)) * B
                ? Eigen::VectorXd(c.psi.minimizer.tail(rest))
                : Eigen::VectorXd();
     r.u.push_back(c.u);

@@ -32,16 +32,18 @@
 // clang-format on
 //
 // Common mistakes: R and Q Q^T that violate condition (8) (the constructor names the entry that
-// does not match); noise acting on a subspace only (Sigma singular: integrate over the noisy
-// coordinates, see robot_arm.hpp); writing a hard wall as V = +inf in running_cost: that only
-// zeroes weights, and with several openings the samples of one Laplace approximation rarely
-// reach the other openings. Describe it as a HardWall instead: the estimator then finds one
-// constrained minimum per opening and samples a mixture (spec §2.4.3). The random map needs F to
-// increase along every ray from its minimiser ("star-shaped", e.g. convex F); with walls it runs
-// inside each mode's openings, which is exact for a convex F.
+// does not match); noise acting on a subspace only (Sigma singular: put the noise-free
+// coordinates first and declare the number Dv of noisy ones, ControlProblem<D, P, Model, Dv>, as
+// arm_joint_problem in robot_arm.hpp does; partial_noise.hpp); writing a hard wall as V = +inf in
+// running_cost: that only zeroes weights, and with several openings the samples of one Laplace
+// approximation rarely reach the other openings. Describe it as a HardWall instead: the estimator
+// then finds one constrained minimum per opening and samples a mixture (spec §2.4.3). The random
+// map needs F to increase along every ray from its minimiser ("star-shaped", e.g. convex F); with
+// walls it runs inside each mode's openings, which is exact for a convex F.
 //
 // The pieces, one header each: problem.hpp (ControlSpec, HardWall, ControlProblem),
-// path_function.hpp (F and its derivatives), path_solvers.hpp (constrained Newton, the random
+// path_function.hpp (F and its derivatives), partial_noise.hpp (F over the noisy coordinates
+// when the noise acts on some only), path_solvers.hpp (constrained Newton, the random
 // map's ray equation), wall_modes.hpp (the modes of hard walls), wall_mixture.hpp (the mixture
 // over them), wall_values.hpp (linear-quadratic models: only the wall values are drawn),
 // estimators.hpp (log psi by implicit sampling or plain Monte Carlo), controller.hpp (the control
