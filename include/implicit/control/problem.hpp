@@ -246,7 +246,9 @@ class ControlProblem {
     return gamma_ * llt.solve(slopes);
   }
 
-  /// F over y_1..y_n (n = path_length(k)) from y_0 = x at t_k: a banded target with D x D blocks.
+  /// F over y_1..y_n (n = path_length(k)) from y_0 = x at t_k: a banded target with D x D blocks
+  /// (PathFunction), or with partial noise a dense one over the noisy coordinates
+  /// (PartialNoisePathFunction).
   PathFunction path_function(const Vec<D>& x, int k) const {
     require(k >= 0 && k < num_steps_, "control problem: expected a step in [0, {}), got {}",
             num_steps_, k);

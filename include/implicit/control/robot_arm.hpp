@@ -9,12 +9,16 @@
 // |theta'(tf)|^2/2 + integral r|u|^2/2] by path integral control. Noise acts on velocities only
 // (partial noise), so the path integral runs over the velocity path y_1..y_n of each joint; F is
 // quadratic, psi is exact without sampling, and the control equals discrete LQR (spec §2.5.3),
-// which the tests check to machine precision.
+// which the tests check to machine precision. Each joint is also a generic ControlProblem with
+// partial noise (arm_joint_problem), which the library's estimator solves with the same F
+// (`implicit arm` runs Figure 4 that way); the closed form here is its independent check.
 //
 //   implicit::control::ArmProblem arm;                          // spec §2.5.4 parameters
 //   auto j = implicit::control::joint_path_integral(0.2, 0.3, 1.0, 200, arm);  // one joint
 //   j.u;        // 0.581932896431 (explicit scheme)
 //   auto sim = implicit::control::simulate_arm(arm, ArmParameters{}, ArmParameters{});
+//   auto same = implicit::control::simulate_arm(arm, ArmParameters{}, ArmParameters{}, 10,
+//                                               ArmController::kGeneric);  // to 1e-7 in u
 //
 // Common mistakes (spec E17-E19): the paper's M11 = a1 + a3 cos(theta2) is not a two-link arm's
 // (use a1 + 2 a3 cos(theta2)); inverse dynamics needs C(theta, theta') theta' (C is a matrix);
