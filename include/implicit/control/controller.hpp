@@ -29,10 +29,11 @@ struct ControlEstimate {
 /// u = gamma R^-1 G^T grad log psi_hat by central differences along the columns g_j of G with
 /// common random numbers: the same reference variables at x + s g_j and x - s g_j (s |g_j| = h),
 /// minimisers warm-started at mu(x). `warm` (a path y_1..y_n, e.g. the previous step's minimiser
-/// shifted by one step) starts the minimisation at x; empty: the drift path. A wall at t_k is behind the control (it moves only
-/// the states after t_k): the estimates ignore it (WallSampling::test_start). When no sample passes
-/// at x or at some x +- s g_j, u differentiates the Laplace approximation of psi instead
-/// (o.laplace_fallback; `fallback`), or is left undefined (`defined` false).
+/// shifted by one step) starts the minimisation at x; empty: the drift path. A wall at t_k is
+/// behind the control (it moves only the states after t_k): the estimates ignore it
+/// (WallSampling::test_start). When no sample passes at x or at some x +- s g_j, u
+/// differentiates the Laplace approximation of psi instead (o.laplace_fallback; `fallback`), or
+/// is left undefined (`defined` false).
 template <typename Problem>
 ControlEstimate<Problem::kControlDim> estimate_control(const Problem& problem,
                                                        const Vec<Problem::kStateDim>& x, int k,
