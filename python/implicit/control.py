@@ -53,12 +53,15 @@ def _json(text):
     return json.loads(text)
 
 
-def double_slit(samples=50, runs=500, mode="corrected", seed=1, out=None, threads=0):
+def double_slit(samples=50, runs=500, mode="corrected", seed=1, out=None, threads=0,
+                estimator="generic"):
     """The double slit closed loop (Table 2): mode "paper" (estimator P) or "corrected" (W2).
 
-    Returns the dict of `implicit slit --json` (error_x_mean, error_u_mean in %, ...).
+    estimator: "generic" (the library's path integral estimator) or "wall-space" (the double
+    slit's own, the same runs to rounding). Returns the dict of `implicit slit --json`
+    (error_x_mean, error_u_mean in %, ...).
     """
-    return _json(_implicit._run_slit(int(samples), int(runs), mode, int(seed),
+    return _json(_implicit._run_slit(int(samples), int(runs), mode, str(estimator), int(seed),
                                      "" if out is None else str(out), int(threads)))
 
 

@@ -105,16 +105,17 @@ void init_runs(py::module_& m) {
       py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"));
   m.def(
       "_run_slit",
-      [](int samples, int runs, const std::string& mode, std::uint64_t seed, const std::string& out,
-         int threads) {
+      [](int samples, int runs, const std::string& mode, const std::string& estimator,
+         std::uint64_t seed, const std::string& out, int threads) {
         app::SlitSettings s;
         s.samples = samples;
         s.runs = runs;
         s.mode = mode;
+        s.estimator = estimator;
         return run_json(s, seed, out, threads, &app::run_slit);
       },
-      py::arg("samples"), py::arg("runs"), py::arg("mode"), py::arg("seed"), py::arg("out"),
-      py::arg("threads"));
+      py::arg("samples"), py::arg("runs"), py::arg("mode"), py::arg("estimator"), py::arg("seed"),
+      py::arg("out"), py::arg("threads"));
   m.def(
       "_run_himmelblau",
       [](int runs, int samples, std::uint64_t seed, const std::string& out, int threads) {

@@ -50,6 +50,9 @@ def test_control_runs_equal_the_cli_json(cli):
     c = cli("slit", "--samples", "10", "--runs", "4", "--seed", "2")
     for key in ("error_x_mean", "error_u_mean"):
         assert r[key] == c[key], key
+    w = implicit.control.double_slit(samples=10, runs=4, seed=2, estimator="wall-space")
+    assert (r["estimator"], w["estimator"]) == ("generic", "wall-space")
+    assert w["error_u_mean"] == pytest.approx(r["error_u_mean"], rel=1e-9)  # the same runs
     for estimator in ("generic", "closed-form"):
         r = implicit.control.arm(estimator=estimator)
         c = cli("arm", "--estimator", estimator)
