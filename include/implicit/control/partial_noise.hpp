@@ -163,9 +163,9 @@ class PartialNoisePathFunction {
               jz[s]->leftCols(c).transpose() * hzz * jz[t]->leftCols(c);
         const Eigen::Matrix<double, Dz, Dv> hzv = h.template block<Dz, Dv>(zs[s], vs[t]);
         if (hzv.isZero(0.0)) continue;
-        const Eigen::MatrixXd m = jz[s]->leftCols(c).transpose() * hzv;  // c x Dv
-        hess->block(0, vcol[t], c, Dv) += m;
-        hess->block(vcol[t], 0, Dv, c) += m.transpose();
+        // Both off-diagonal blocks directly: a c x Dv temporary would allocate per term.
+        hess->block(0, vcol[t], c, Dv).noalias() += jz[s]->leftCols(c).transpose() * hzv;
+        hess->block(vcol[t], 0, Dv, c).noalias() += hzv.transpose() * jz[s]->leftCols(c);
       }
     }
   }
