@@ -10,6 +10,7 @@ packages=(
   python3 python3-dev python3-numpy python3-matplotlib python3-pytest zlib1g-dev
   clang-14 libclang-rt-14-dev  # make test-sanitize, make fuzz-smoke: clang++ 14, ASan, UBSan, libFuzzer
   libopenmpi-dev openmpi-bin  # the MPI build (docs/cluster.md)
+  libyaml-cpp-dev  # ROS map_server map files (robot/map_io.cpp)
   pkgconf doxygen
 )
 

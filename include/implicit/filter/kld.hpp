@@ -26,7 +26,7 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
-#include "implicit/robot/ute_model.hpp"
+#include "implicit/robot/types.hpp"
 
 namespace implicit::filter {
 

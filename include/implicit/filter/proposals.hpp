@@ -34,6 +34,7 @@
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/filter/mcl_objective.hpp"
+#include "implicit/filter/observation_proposals.hpp"
 #include "implicit/robot/data_association.hpp"
 #include "implicit/robot/models.hpp"
 
@@ -164,6 +165,7 @@ double sensor_log_likelihood(const Ctx& ctx, const Pose& x, ParticleStats& st) {
 /// Standard MCL: sample the motion model, weight by the sensor likelihood.
 struct BootstrapProposal {
   static constexpr std::uint64_t kPurpose = purpose::kProposal;
+  static constexpr bool kNeedsDerivatives = false;
   static constexpr std::string_view kName = "standard";
 
   template <typename Motion, typename Sensor>
@@ -186,6 +188,13 @@ struct BootstrapProposal {
     }
     return log_w;
   }
+
+  /// The same proposal for a filter on an observation model (observation_proposals.hpp).
+  template <typename Motion, typename Observation>
+  double propose(const ObservationContext<Motion, Observation>& ctx, const Pose& previous,
+                 Rng& rng, Pose& next, ParticleStats& st) const {
+    return detail::bootstrap_step(ctx, previous, rng, next, st);
+  }
 };
 
 enum class ImplicitMap { kLinear, kRandom };
@@ -194,9 +203,19 @@ enum class ImplicitMap { kLinear, kRandom };
 struct ImplicitProposal {
   static constexpr std::uint64_t kPurpose = purpose::kReference;
   static constexpr std::string_view kName = "implicit";
+  static constexpr bool kNeedsDerivatives = true;
 
   ImplicitMap map = ImplicitMap::kLinear;
   NewtonOptions newton = mcl_newton_options();
+  /// Newton's rules for observation models with a Gauss-Newton matrix (laser scans).
+  NewtonOptions scan_newton = scan_newton_options();
+
+  /// The same proposal for a filter on an observation model (observation_proposals.hpp).
+  template <typename Motion, typename Observation>
+  double propose(const ObservationContext<Motion, Observation>& ctx, const Pose& previous,
+                 Rng& rng, Pose& next, ParticleStats& st) const {
+    return detail::implicit_step(ctx, map, scan_newton, previous, rng, next, st);
+  }
 
   template <typename Motion, typename Sensor>
   double propose(const ProposalContext<Motion, Sensor>& ctx, const Pose& previous, Rng& rng,

@@ -33,7 +33,7 @@
 #include <Eigen/Cholesky>
 
 #include "implicit/core/types.hpp"
-#include "implicit/robot/range_bearing.hpp"
+#include "implicit/robot/types.hpp"
 
 namespace implicit::robot {
 

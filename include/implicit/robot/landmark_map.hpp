@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "implicit/core/error.hpp"
-#include "implicit/robot/range_bearing.hpp"
+#include "implicit/robot/types.hpp"
 
 namespace implicit::robot {
 

@@ -22,14 +22,9 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/types.hpp"
 #include "implicit/core/weights.hpp"
-#include "implicit/robot/ute_model.hpp"
+#include "implicit/robot/types.hpp"
 
 namespace implicit::robot {
-
-using Landmark = Vec<2>;     ///< (east [m], north [m])
-using Measurement = Vec<2>;  ///< (range [m], bearing [rad])
-using Mat2 = Mat<2>;
-using Mat23 = Eigen::Matrix<double, 2, 3>;
 
 /// The one range-bearing Jacobian of the library. For a sensor at s(x) seeing the landmark at
 /// offset d = m - s, with q = d s / d heading (zero for a sensor at the state's position):

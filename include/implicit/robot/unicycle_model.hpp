@@ -17,7 +17,7 @@
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/types.hpp"
-#include "implicit/robot/ute_model.hpp"
+#include "implicit/robot/types.hpp"
 
 namespace implicit::robot {
 

@@ -18,13 +18,11 @@
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/types.hpp"
+#include "implicit/robot/types.hpp"
 
 namespace implicit::robot {
 
-using Pose = Vec<3>;     ///< (x [m], y [m], heading beta [rad]); heading may be left unwrapped
-using Control = Vec<2>;  ///< (vc [m/s] axle speed, alpha [rad] steering)
-using Mat3 = Mat<3>;
-using Mat32 = Eigen::Matrix<double, 3, 2>;
+// Pose = (x, y, beta) and Control = (vc [m/s] axle speed, alpha [rad] steering) here.
 
 /// Parameters of the Ute (paper Table 7, corrected per spec E25-E27).
 struct UteParams {

@@ -1,0 +1,127 @@
+#pragma once
+// The two proposals for any observation model (robot/observation_model.hpp): what
+// BootstrapProposal and ImplicitProposal (proposals.hpp) do at a step of a filter on the
+// generic seam (monte_carlo_localization.hpp).
+//
+//   bootstrap: X ~ N(f, Sigma1), log w += log p(z | X)
+//   implicit:  minimise F = prior + observation terms (pose_objective.hpp), X = mu + L^-T xi
+//              (linear map) or the random map, log w += (3/2) log 2pi - log det L + |xi|^2/2 - F(X)
+//
+// Both use the same Gaussian transition, so they target the same posterior; the implicit
+// increment's expectation over xi is the predictive likelihood p(z | X_{n-1}).
+
+#include <cmath>
+#include <limits>
+
+#include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/implicit_maps.hpp"
+#include "implicit/core/implicit_maps.hpp"
+#include "implicit/core/rng.hpp"
+#include "implicit/filter/pose_objective.hpp"
+#include "implicit/robot/observation_model.hpp"
+
+namespace implicit::filter {
+
+/// Everything a proposal needs at one step of a filter on an observation model.
+template <typename Motion, typename Observation>
+struct ObservationContext {
+  const Motion* motion = nullptr;
+  const Observation* observation = nullptr;
+  robot::ControlOf<Motion> u{};
+  const typename Observation::Prepared* z = nullptr;  ///< null: prediction only
+};
+
+namespace detail {
+
+/// The prediction f, Sigma1 and its Cholesky factor; false if Sigma1 is not SPD or f not finite.
+template <robot::PoseMotionModel Motion>
+bool predict_pose(const Motion& motion, const robot::Pose& previous,
+                  const robot::ControlOf<Motion>& u, robot::Pose& f, robot::Mat3& sigma1,
+                  SmallFactor<3>& factor) {
+  if constexpr (robot::PoseMotionModelWithCovariance<Motion>) {
+    motion.predict_with_covariance(previous, u, f, sigma1);
+  } else {
+    f = motion.predict(previous, u);
+    sigma1 = motion.process_covariance(previous, u);
+  }
+  return f.allFinite() && sigma1.allFinite() && factor.compute(sigma1);
+}
+
+template <typename Motion, typename Observation, typename Stats>
+double bootstrap_step(const ObservationContext<Motion, Observation>& ctx,
+                      const robot::Pose& previous, Rng& rng, robot::Pose& next, Stats& st) {
+  constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+  robot::Pose f;
+  robot::Mat3 sigma1_full;
+  SmallFactor<3> sigma1;
+  if (!predict_pose(*ctx.motion, previous, ctx.u, f, sigma1_full, sigma1)) {
+    st.failed = true;
+    next = previous;
+    return kNegInf;
+  }
+  const Vec<3> xi = rng.normal_vector<3>();  // one call: argument order is unspecified
+  next = f + sigma1.matrixL() * xi;
+  if (ctx.z == nullptr) return 0.0;
+  const double log_w = ctx.observation->log_likelihood(*ctx.z, next);
+  if (std::isnan(log_w) || log_w == std::numeric_limits<double>::infinity()) {
+    st.failed = true;
+    return kNegInf;
+  }
+  return log_w;
+}
+
+template <typename Motion, typename Observation, typename Stats, typename MapKind>
+double implicit_step(const ObservationContext<Motion, Observation>& ctx, MapKind map,
+                     const NewtonOptions& newton, const robot::Pose& previous, Rng& rng,
+                     robot::Pose& next, Stats& st) {
+  constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+  robot::Pose f;
+  robot::Mat3 sigma1_full;
+  SmallFactor<3> sigma1;
+  if (!predict_pose(*ctx.motion, previous, ctx.u, f, sigma1_full, sigma1)) {
+    st.failed = true;
+    next = previous;
+    return kNegInf;
+  }
+  const Vec<3> xi = rng.normal_vector<3>();
+  if (ctx.z == nullptr) {  // F is the Gaussian prior: mu = f, all weights equal
+    next = f + sigma1.matrixL() * xi;
+    return 0.0;
+  }
+  const robot::Mat3 prior_information = sigma1.inverse();
+  const double constant = 1.5 * kLog2Pi + sigma1.log_det_L();  // 1/2 log det(2 pi Sigma1)
+  PoseObjective<Observation> obj;
+  obj.reset(*ctx.observation, *ctx.z, f, prior_information, constant);
+  const NewtonMinimum<SmallFactor<3>> nr = newton_minimize<SmallFactor<3>>(obj, f, newton);
+  st.iterations += nr.evaluations;
+  st.fallback = st.fallback || !nr.exact_factor;
+  const bool usable_minimum = nr.factor_ok && nr.status != MinimizeStatus::kNonFinite &&
+                              std::isfinite(nr.value) && std::isfinite(nr.factor.log_det_L());
+  if (!usable_minimum) {
+    // No Gaussian approximation: sample the prior and weight by the likelihood (the bootstrap
+    // fallback, still a valid proposal).
+    st.fallback = true;
+    next = f + sigma1.matrixL() * xi;
+    const double lw = ctx.observation->log_likelihood(*ctx.z, next);
+    if (!std::isfinite(lw)) {
+      st.failed = true;
+      return kNegInf;
+    }
+    return lw;
+  }
+  double log_w = kNegInf;
+  if (map == MapKind::kLinear) {
+    log_w = linear_map(obj, nr.x, nr.factor, xi, next);
+  } else if (implicit::random_map(obj, nr.x, nr.value, nr.factor, xi, next, log_w) !=
+             RayStatus::kOk) {
+    next = nr.x;  // weight zero: no root on the ray
+  }
+  if (!std::isfinite(log_w)) {
+    st.failed = true;
+    return kNegInf;
+  }
+  return log_w;
+}
+
+}  // namespace detail
+}  // namespace implicit::filter
