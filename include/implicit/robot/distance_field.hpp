@@ -45,6 +45,7 @@ class DistanceField {
   int height() const { return height_; }
   double resolution() const { return resolution_; }
   const Vec<2>& origin() const { return origin_; }
+  /// The cap, as given rounded to float (the precision every distance is stored in).
   double max_distance() const { return max_distance_; }
 
   /// The capped distance at the centre of cell (ix, iy); max_distance outside the grid.
@@ -58,8 +59,8 @@ class DistanceField {
   double resolution_ = 0.0;
   Vec<2> origin_ = Vec<2>::Zero();
   double max_distance_ = 0.0;
-  int pad_ = 2;                 ///< cells of max_distance around the grid (bicubic reads +-2)
-  std::vector<float> padded_;   ///< (width + 2 pad) x (height + 2 pad), row-major, row 0 lowest y
+  int pad_ = 2;                ///< cells of max_distance around the grid (bicubic reads +-2)
+  std::vector<float> padded_;  ///< (width + 2 pad) x (height + 2 pad), row-major, row 0 lowest y
   int padded_width_ = 0;
   double inv_resolution_ = 0.0;  ///< cells per metre: distance() multiplies, never divides
   /// Grid coordinates (in cells) inside which distance() interpolates; farther out every mode

@@ -1,0 +1,181 @@
+#include "implicit/robot/grid_mapping.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "grid_walk.hpp"
+#include "implicit/core/error.hpp"
+
+namespace implicit::robot {
+namespace {
+
+constexpr double kMappingUnbounded = std::numeric_limits<double>::infinity();
+
+Pose sensor_pose(const Pose& robot_pose, const LaserMount& mount) {
+  return compose(robot_pose, Pose(mount.x, mount.y, mount.yaw));
+}
+
+void require_finite_mount(const LaserMount& mount, const char* who) {
+  require(std::isfinite(mount.x) && std::isfinite(mount.y) && std::isfinite(mount.yaw),
+          "{}: expected a finite laser mount, got ({}, {}, {})", who, mount.x, mount.y, mount.yaw);
+}
+
+// How far beam i of `scan` is used, and whether it ends in a hit (GridMappingOptions).
+struct BeamUse {
+  double length = 0.0;
+  bool hit = false;
+  bool used = false;
+};
+
+BeamUse beam_use(const LaserScan& scan, std::size_t i, double max_range) {
+  const double r = scan.ranges[i];
+  if (r < scan.range_min) return {};  // not a measurement
+  const double limit = max_range > 0 ? max_range : scan.range_max;
+  if (scan.is_hit(i) && r < limit) return {r, true, true};
+  // No return within range_max says nothing beyond it, whatever max_range is.
+  return {std::min(limit, scan.range_max), false, true};
+}
+
+}  // namespace
+
+void GridMappingOptions::validate() const {
+  const auto positive = [](double v) { return std::isfinite(v) && v > 0; };
+  require(positive(resolution), "GridMappingOptions: expected resolution > 0 [m], got {}",
+          resolution);
+  require(positive(log_odds_hit), "GridMappingOptions: expected log_odds_hit > 0, got {}",
+          log_odds_hit);
+  require(std::isfinite(log_odds_miss) && log_odds_miss < 0,
+          "GridMappingOptions: expected log_odds_miss < 0, got {}", log_odds_miss);
+  require(positive(clamp), "GridMappingOptions: expected clamp > 0, got {}", clamp);
+  require(std::isfinite(max_range) && max_range >= 0,
+          "GridMappingOptions: expected max_range >= 0 [m] (0: the scan's range_max), got {}",
+          max_range);
+  require(std::isfinite(margin) && margin >= 0,
+          "GridMappingOptions: expected margin >= 0 [m], got {}", margin);
+}
+
+LogOddsGrid::LogOddsGrid(int width, int height, double resolution, const Vec<2>& origin,
+                         const GridMappingOptions& options)
+    : width_(width), height_(height), resolution_(resolution), origin_(origin), options_(options) {
+  options.validate();
+  require(width > 0 && height > 0, "LogOddsGrid: expected a positive width and height, got {} x {}",
+          width, height);
+  require(std::isfinite(resolution) && resolution > 0,
+          "LogOddsGrid: expected a positive, finite resolution [m], got {}", resolution);
+  require(origin.allFinite(), "LogOddsGrid: expected a finite origin, got ({}, {})", origin.x(),
+          origin.y());
+  const auto cells = static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
+  require(cells <= (std::uint64_t{1} << 31),
+          "LogOddsGrid: expected at most 2^31 cells, got {} x {} = {}", width, height, cells);
+  log_odds_.assign(static_cast<std::size_t>(cells), 0.0f);
+  observed_.assign(static_cast<std::size_t>(cells), 0);
+}
+
+void LogOddsGrid::update(int ix, int iy, double delta) {
+  const std::size_t k = index(ix, iy);
+  log_odds_[k] =
+      static_cast<float>(std::clamp(double(log_odds_[k]) + delta, -options_.clamp, options_.clamp));
+  observed_[k] = 1;
+}
+
+// Walks the beam from `from` (world) along `angle` for `length` metres: misses in every cell
+// it crosses, and in the cell of its end point a hit (or a miss when `hit` is false).
+void LogOddsGrid::trace(const Vec<2>& from, double angle, double length, bool hit) {
+  const double inv_res = 1.0 / resolution_;
+  const Vec<2> g = (from - origin_) * inv_res;
+  const Vec<2> d(std::cos(angle), std::sin(angle));
+  const double end = length * inv_res;
+  double t = 0.0;
+  if (!detail::enter_box(g, d, width_, height_, kMappingUnbounded, &t) || t > end) return;
+  int ix = 0, iy = 0;
+  detail::entry_cell(g + t * d, width_, height_, &ix, &iy);
+  detail::CellWalk walk(g, d, ix, iy);
+  for (;;) {
+    const int px = walk.ix(), py = walk.iy();
+    if (walk.next() >= end) {  // (px, py) holds the end point
+      update(px, py, hit ? options_.log_odds_hit : options_.log_odds_miss);
+      return;
+    }
+    update(px, py, options_.log_odds_miss);
+    if (!contains(walk.ix(), walk.iy())) return;  // the rest of the beam is outside
+  }
+}
+
+void LogOddsGrid::integrate(const Pose& robot_pose, const LaserMount& mount,
+                            const LaserScan& scan) {
+  scan.validate("LogOddsGrid::integrate");
+  require(robot_pose.allFinite(),
+          "LogOddsGrid::integrate: expected a finite pose, got ({}, {}, {})", robot_pose(0),
+          robot_pose(1), robot_pose(2));
+  require_finite_mount(mount, "LogOddsGrid::integrate");
+  const Pose s = sensor_pose(robot_pose, mount);
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    const BeamUse use = beam_use(scan, i, options_.max_range);
+    if (use.used) trace(s.head<2>(), s(2) + scan.bearing(i), use.length, use.hit);
+  }
+}
+
+OccupancyGrid LogOddsGrid::to_occupancy() const {
+  OccupancyGrid out(width_, height_, resolution_, origin_, OccupancyGrid::kUnknown);
+  for (int iy = 0; iy < height_; ++iy)
+    for (int ix = 0; ix < width_; ++ix) {
+      if (!observed(ix, iy)) continue;
+      const double p = 1.0 - 1.0 / (1.0 + std::exp(double(log_odds(ix, iy))));
+      out.at(ix, iy) = static_cast<std::int8_t>(std::lround(100.0 * p));
+    }
+  return out;
+}
+
+OccupancyGrid build_map(std::span<const Pose> robot_poses, std::span<const LaserScan> scans,
+                        const LaserMount& mount, const GridMappingOptions& options) {
+  options.validate();
+  require(robot_poses.size() == scans.size(),
+          "build_map: expected one robot pose per scan, got {} poses and {} scans",
+          robot_poses.size(), scans.size());
+  require(!scans.empty(), "build_map: expected at least one scan, got none");
+  require_finite_mount(mount, "build_map");
+
+  // The extent: every sensor position and every end point the mapper will reach.
+  Vec<2> lo = Vec<2>::Constant(kMappingUnbounded), hi = -lo;
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    const Pose& x = robot_poses[k];
+    require(x.allFinite(), "build_map: expected finite robot poses, got ({}, {}, {}) at pose {}",
+            x(0), x(1), x(2), k);
+    scans[k].validate(fmt::format("build_map: scan {}", k));
+    const Pose s = sensor_pose(x, mount);
+    lo = lo.cwiseMin(s.head<2>());
+    hi = hi.cwiseMax(s.head<2>());
+    for (std::size_t i = 0; i < scans[k].size(); ++i) {
+      const BeamUse use = beam_use(scans[k], i, options.max_range);
+      if (!use.used) continue;
+      const double a = s(2) + scans[k].bearing(i);
+      const Vec<2> e = s.head<2>() + use.length * Vec<2>(std::cos(a), std::sin(a));
+      lo = lo.cwiseMin(e);
+      hi = hi.cwiseMax(e);
+    }
+  }
+  const double res = options.resolution;
+  // The corner on a multiple of the resolution, so that maps of one place share their cells.
+  const Vec<2> origin((std::floor((lo.x() - options.margin) / res)) * res,
+                      (std::floor((lo.y() - options.margin) / res)) * res);
+  const double w = std::floor((hi.x() + options.margin - origin.x()) / res) + 1;
+  const double h = std::floor((hi.y() + options.margin - origin.y()) / res) + 1;
+  // Compared as doubles, before any conversion to int (NaN fails too).
+  if (!(w * h <= static_cast<double>(kMaxMappedCells)))
+    throw InvalidArgument(fmt::format(
+        "build_map: expected a map of at most {} cells, got {} x {} cells of {} m: x spans {} .. "
+        "{} m and y spans {} .. {} m ({} m and {} m with the {} m margin; the larger is {}). "
+        "Limit max_range or coarsen the resolution",
+        kMaxMappedCells, w, h, res, lo.x(), hi.x(), lo.y(), hi.y(), w * res, h * res,
+        options.margin, w >= h ? "x" : "y"));
+
+  LogOddsGrid grid(static_cast<int>(w), static_cast<int>(h), res, origin, options);
+  for (std::size_t k = 0; k < scans.size(); ++k) grid.integrate(robot_poses[k], mount, scans[k]);
+  return grid.to_occupancy();
+}
+
+}  // namespace implicit::robot
