@@ -96,9 +96,13 @@ class Fields {
                          printable(tokens_[first + i])));
   }
 
-  /// Fields k, k+1, k+2 as a pose named by `names` (e.g. "x y theta").
+  /// Fields k, k+1, k+2 as a pose; x, y, theta name the fields in messages.
   Pose pose(std::size_t k, std::string_view x, std::string_view y, std::string_view theta) const {
-    return Pose(number(k, x), number(k + 1, y), number(k + 2, theta));
+    Pose p;  // read in order, so that the first bad field is the one reported
+    p(0) = number(k, x);
+    p(1) = number(k + 1, y);
+    p(2) = number(k + 2, theta);
+    return p;
   }
 
   /// Requires exactly `expected` fields after the name; `layout` describes them.

@@ -226,6 +226,8 @@ TEST(Carmen, MalformedOldLaserLinesNameFileLineAndField) {
             "bad.log:1: FLASER field 'n': expected an integer, got '2.5'");
   EXPECT_EQ(error_of("FLASER 2 1 1 0 0 0 0 NaN 0 1 h 1\n"),
             "bad.log:1: FLASER field 'odom_y': expected a finite number, got 'NaN'");
+  EXPECT_EQ(error_of("FLASER 2 1 1 nan nan nan 0 0 0 1 h 1\n"),  // the first bad field
+            "bad.log:1: FLASER field 'x': expected a finite number, got 'nan'");
   EXPECT_EQ(error_of("FLASER 2 1 1 0 0 inf 0 0 0 1 h 1\n"),
             "bad.log:1: FLASER field 'theta': expected a finite number, got 'inf'");
   EXPECT_EQ(error_of("FLASER 2 1 1 0 0 0 0 0 0 12:30 h 1\n"),
