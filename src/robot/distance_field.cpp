@@ -168,15 +168,17 @@ double DistanceField::distance(const Vec<2>& p, Interpolation mode, Vec<2>* grad
   const double v = (p.y() - origin_.y()) * inv_resolution_;
   if (!(u > u_lo_ && u < u_hi_ && v > v_lo_ && v < v_hi_)) return outside(u, v, gradient);
 
+  // Floors by truncation of a positive number (u, v > -3 here): std::floor is a library call
+  // on plain x86-64. A coordinate within an ulp below an integer may round up to it when
+  // shifted, which moves it to the next cell with an offset of -1e-16: the same value.
   if (mode == Interpolation::kNearest) {
     if (gradient != nullptr) gradient->setZero();
-    return value_at(static_cast<int>(std::floor(u)), static_cast<int>(std::floor(v)));
+    return value_at(static_cast<int>(u + 3.0) - 3, static_cast<int>(v + 3.0) - 3);
   }
   // Offsets from the centres: a lies between the centres of cells i0 and i0 + 1.
   const double a = u - 0.5, b = v - 0.5;
-  const double fa = std::floor(a), fb = std::floor(b);
-  const double tx = a - fa, ty = b - fb;
-  const int i0 = static_cast<int>(fa), j0 = static_cast<int>(fb);
+  const int i0 = static_cast<int>(a + 4.0) - 4, j0 = static_cast<int>(b + 4.0) - 4;
+  const double tx = a - i0, ty = b - j0;
 
   if (mode == Interpolation::kBilinear) {
     float c[4];

@@ -9,15 +9,12 @@
 
 #include "grid_walk.hpp"
 #include "implicit/core/error.hpp"
+#include "implicit/robot/scan_simulation.hpp"  // sensor_pose
 
 namespace implicit::robot {
 namespace {
 
 constexpr double kMappingUnbounded = std::numeric_limits<double>::infinity();
-
-Pose sensor_pose(const Pose& robot_pose, const LaserMount& mount) {
-  return compose(robot_pose, Pose(mount.x, mount.y, mount.yaw));
-}
 
 void require_finite_mount(const LaserMount& mount, const char* who) {
   require(std::isfinite(mount.x) && std::isfinite(mount.y) && std::isfinite(mount.yaw),
