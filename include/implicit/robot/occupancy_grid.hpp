@@ -77,7 +77,11 @@ class OccupancyGrid {
 
 /// The range from `from` along heading `angle` to the first occupied cell, walking the cells the
 /// ray crosses (Amanatides-Woo), up to max_range; max_range when nothing is hit within it or
-/// the ray leaves the grid. A start inside an occupied cell gives 0.
+/// the ray leaves the grid. A start inside an occupied cell gives 0. A start outside the grid is
+/// allowed: the ray is followed from where it enters (cells outside count as empty). A ray
+/// through a cell corner exactly stops there if either cell beside the corner is occupied, so
+/// that a diagonal wall of cells touching at corners is not see-through. Throws InvalidArgument
+/// for an empty grid, a non-finite start or angle, or a max_range that is negative or infinite.
 double cast_ray(const OccupancyGrid& grid, const Vec<2>& from, double angle, double max_range);
 
 }  // namespace implicit::robot
