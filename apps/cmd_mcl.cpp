@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "cmd_mcl_laser.hpp"
 #include "context.hpp"
 #include "experiments.hpp"
 #include "implicit/core/parallel.hpp"
@@ -14,9 +15,11 @@ struct MclCommand {
   MclSettings settings;
   RunContext ctx;
   bool allow_empty = false;
+  LaserCommand laser;
+  std::string map;  ///< --map: linear|random (landmark), or a map file (laser)
 };
 
-/// The options of global localization, kidnapping, recovery and KLD-sampling (spec §3.10).
+/// The options of global localization, kidnapping, recovery and KLD-sampling (spec §3.11).
 void add_global_options(CLI::App& sub, MclSettings& s) {
   sub.add_option("--init", s.init,
                  "known: start from the log's initial pose; global: no initial pose (run r starts "
@@ -102,9 +105,12 @@ void setup_mcl(CLI::App& sub) {
       ->check(in_range(0.0, 10.0));
   sub.add_option("--q", cmd->settings.q, "State noise q1 = q2 [m] (default 0.1)")
       ->check(in_range(1e-6, 10.0));
-  sub.add_option("--map", cmd->settings.map, "Implicit proposal map: linear or random")
+  sub.add_option("--implicit-map", cmd->settings.map, "Implicit proposal map: linear or random")
       ->check(CLI::IsMember({"linear", "random"}))
       ->capture_default_str();
+  sub.add_option("--map", cmd->map,
+                 "laser: the occupancy grid, a map_server YAML file (default: built from the log's "
+                 "reference poses); landmark: linear or random, as --implicit-map");
   sub.add_option("--sigma2", cmd->settings.sigma2,
                  "Reading of Table 7's Sigma2 entries: variance (spec E27) or std")
       ->check(CLI::IsMember({"variance", "std"}))
@@ -145,6 +151,7 @@ void setup_mcl(CLI::App& sub) {
   sub.add_flag("--no-clutter{false}", cmd->settings.clutter,
                "Dropped detections contribute nothing (instead of the clutter density p0)");
   add_global_options(sub, cmd->settings);
+  add_laser_options(sub, cmd->laser);
   sub.add_flag("--allow-empty", cmd->allow_empty,
                "Exit 0 even when the run scored nothing (no step with truth, no landmark, a "
                "non-finite metric); a warning is printed either way");
@@ -153,9 +160,22 @@ void setup_mcl(CLI::App& sub) {
                      "implicit mcl --model unicycle --data u.log.gz --method implicit -M 100",
                      "implicit mcl --method standard --particles 300 --config B --out out/mcl",
                      "implicit mcl --init global --method implicit -M 200 --runs 20 --json",
-                     "implicit mcl --kidnap-at 60 --kidnap-skip 10 --method standard --kld"});
+                     "implicit mcl --kidnap-at 60 --kidnap-skip 10 --method standard --kld",
+                     "implicit mcl --sensor laser --data data/carmen/intel-corrected.log.gz "
+                     "--method implicit -M 100 --runs 10 --json"});
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
+    if (cmd->laser.sensor == "laser") {
+      run_laser_mcl_command(cmd->settings, cmd->map, cmd->laser, cmd->ctx, cmd->allow_empty);
+      return;
+    }
+    if (!cmd->map.empty()) {
+      require(cmd->map == "linear" || cmd->map == "random",
+              "mcl: --map takes a map file only with --sensor laser; for landmarks it is "
+              "the implicit proposal's map, linear or random, got '{}'",
+              cmd->map);
+      cmd->settings.map = cmd->map;
+    }
     const auto r = run_mcl(cmd->settings, cmd->ctx);
     const auto check = [&] {
       require_scored(r, "mcl", {"error_percent_mean", "rmse_m"}, {}, cmd->allow_empty);

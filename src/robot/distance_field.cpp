@@ -110,36 +110,36 @@ DistanceField::DistanceField(const OccupancyGrid& grid, double max_distance) {
   // outside are one and the same number.
   max_distance_ = static_cast<float>(max_distance);
 
-  std::vector<std::uint8_t> occupied(grid.data().size());
+  // The transform runs on the grid padded by enough free cells that the distance at the outer
+  // edge of the padding is at least max_distance: the field is then the true (capped) distance
+  // to the map's occupied cells everywhere, continuous across the map's border, and equal to
+  // max_distance wherever the padding ends. (A field padded with max_distance instead would
+  // jump from 0 to max_distance next to a wall on the border, and bicubic interpolation would
+  // overshoot below zero there.) Very long caps are limited to 4096 cells of padding.
+  pad_ = static_cast<int>(std::min(4096.0, std::ceil(max_distance / resolution_) + 3.0));
+  padded_width_ = width_ + 2 * pad_;
+  const int padded_height = height_ + 2 * pad_;
+  std::vector<std::uint8_t> occupied(static_cast<std::size_t>(padded_width_) *
+                                         static_cast<std::size_t>(padded_height),
+                                     0);
   for (int iy = 0; iy < height_; ++iy)
     for (int ix = 0; ix < width_; ++ix)
-      occupied[static_cast<std::size_t>(iy) * static_cast<std::size_t>(width_) +
-               static_cast<std::size_t>(ix)] = grid.is_occupied(ix, iy) ? 1 : 0;
-  const std::vector<double> squared = squared_distance_transform(occupied, width_, height_);
-
-  padded_width_ = width_ + 2 * pad_;
-  padded_.assign(
-      static_cast<std::size_t>(padded_width_) * static_cast<std::size_t>(height_ + 2 * pad_),
-      static_cast<float>(max_distance_));
-  for (int iy = 0; iy < height_; ++iy) {
-    float* row = padded_.data() +
-                 static_cast<std::size_t>(iy + pad_) * static_cast<std::size_t>(padded_width_) +
-                 static_cast<std::size_t>(pad_);
-    const double* sq =
-        squared.data() + static_cast<std::size_t>(iy) * static_cast<std::size_t>(width_);
-    for (int ix = 0; ix < width_; ++ix)
-      row[ix] = static_cast<float>(std::min(std::sqrt(sq[ix]) * resolution_, max_distance_));
-  }
-  // Three cells out, the 4 x 4 bicubic neighbourhood (the widest read) holds only padding.
-  u_lo_ = v_lo_ = -3.0;
-  u_hi_ = width_ + 3.0;
-  v_hi_ = height_ + 3.0;
+      occupied[static_cast<std::size_t>(iy + pad_) * static_cast<std::size_t>(padded_width_) +
+               static_cast<std::size_t>(ix + pad_)] = grid.is_occupied(ix, iy) ? 1 : 0;
+  const std::vector<double> squared =
+      squared_distance_transform(occupied, padded_width_, padded_height);
+  padded_.resize(squared.size());
+  for (std::size_t k = 0; k < squared.size(); ++k)
+    padded_[k] = static_cast<float>(std::min(std::sqrt(squared[k]) * resolution_,
+                                             static_cast<double>(max_distance_)));
+  // Two cells inside the padding's edge, the 4 x 4 bicubic neighbourhood (the widest read)
+  // still lies in it; beyond, the field is max_distance (exactly, when the padding is full).
+  u_lo_ = v_lo_ = -(pad_ - 2.0);
+  u_hi_ = width_ + pad_ - 2.0;
+  v_hi_ = height_ + pad_ - 2.0;
 }
 
-double DistanceField::cell_distance(int ix, int iy) const {
-  if (ix < 0 || iy < 0 || ix >= width_ || iy >= height_) return max_distance_;
-  return value_at(ix, iy);
-}
+double DistanceField::cell_distance(int ix, int iy) const { return value_at(ix, iy); }
 
 void DistanceField::gather(int ix, int iy, int n, float* out) const {
   if (ix >= -pad_ && iy >= -pad_ && ix + n <= width_ + pad_ && iy + n <= height_ + pad_) {
@@ -168,16 +168,16 @@ double DistanceField::distance(const Vec<2>& p, Interpolation mode, Vec<2>* grad
   const double v = (p.y() - origin_.y()) * inv_resolution_;
   if (!(u > u_lo_ && u < u_hi_ && v > v_lo_ && v < v_hi_)) return outside(u, v, gradient);
 
-  // Floors by truncation of a positive number (u, v > -3 here): std::floor is a library call
+  // Floors by truncation of a positive number (u, v > 2 - pad_ here): std::floor is a library call
   // on plain x86-64. A coordinate within an ulp below an integer may round up to it when
   // shifted, which moves it to the next cell with an offset of -1e-16: the same value.
   if (mode == Interpolation::kNearest) {
     if (gradient != nullptr) gradient->setZero();
-    return value_at(static_cast<int>(u + 3.0) - 3, static_cast<int>(v + 3.0) - 3);
+    return value_at(static_cast<int>(u + pad_) - pad_, static_cast<int>(v + pad_) - pad_);
   }
   // Offsets from the centres: a lies between the centres of cells i0 and i0 + 1.
   const double a = u - 0.5, b = v - 0.5;
-  const int i0 = static_cast<int>(a + 4.0) - 4, j0 = static_cast<int>(b + 4.0) - 4;
+  const int i0 = static_cast<int>(a + pad_) - pad_, j0 = static_cast<int>(b + pad_) - pad_;
   const double tx = a - i0, ty = b - j0;
 
   if (mode == Interpolation::kBilinear) {

@@ -7,6 +7,8 @@
 #include <limits>
 #include <memory>
 
+#include <Eigen/Eigenvalues>
+
 #include "implicit/core/rng.hpp"
 #include "implicit/robot/distance_field.hpp"
 #include "implicit/robot/likelihood_field.hpp"

@@ -63,22 +63,9 @@ class PoseObjective {
 };
 
 /// Newton's stopping rules for pose objectives whose matrix is Gauss-Newton (convergence is
-/// linear, not quadratic): a step below 1e-6 (m, rad) or a Newton decrement g^T H^-1 g below
-/// 1e-8 (F within about 5e-9 of its minimum along the model) ends it, and 30 iterations at most.
-/// Where it stops does not bias the filter: the weights are exact for any centre and any SPD
-/// matrix; a poorer centre only lowers the effective sample size.
-inline NewtonOptions scan_newton_options() {
-  NewtonOptions o;
-  o.max_iterations = 30;
-  o.gradient_tolerance = 0.0;
-  o.step_tolerance = 1e-6;
-  o.relative_step_tolerance = false;
-  o.decrement_tolerance = 1e-8;
-  o.armijo = 1e-4;
-  o.max_backtracks = 30;
-  o.fallback = HessianFallback::kGaussNewton;
-  o.damping = false;
-  return o;
-}
+/// linear, not quadratic); src/filter/pose_objective.cpp gives them and why. Where Newton stops
+/// does not bias the filter: the weights are exact for any centre and any SPD matrix; a poorer
+/// centre only lowers the effective sample size.
+NewtonOptions scan_newton_options();
 
 }  // namespace implicit::filter

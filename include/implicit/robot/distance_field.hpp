@@ -10,8 +10,9 @@
 // Construction runs the exact Euclidean distance transform of Felzenszwalb and Huttenlocher
 // (2012), linear in the number of cells: two passes of the lower envelope of parabolas, over
 // columns and then over rows. Distances are between cell centres, in metres, and capped at
-// max_distance (also where the grid has no occupied cell at all). Outside the grid the field is
-// max_distance, so interpolation near the border blends smoothly into it.
+// max_distance (also where the grid has no occupied cell at all). Outside the grid the field
+// goes on as the distance to the grid's occupied cells (the transform runs on the grid padded
+// by max_distance of free cells), so it is continuous across the border.
 //
 // Interpolation between cell centres:
 //   kNearest   the value of the cell containing p; gradient zero (the AMCL/Beluga lookup);
@@ -48,7 +49,7 @@ class DistanceField {
   /// The cap, as given rounded to float (the precision every distance is stored in).
   double max_distance() const { return max_distance_; }
 
-  /// The capped distance at the centre of cell (ix, iy); max_distance outside the grid.
+  /// The capped distance at the centre of cell (ix, iy), also outside the grid.
   double cell_distance(int ix, int iy) const;
   /// The interpolated distance at world point p and, if gradient is not null, its gradient
   /// d distance / d p (zero for kNearest).
@@ -59,7 +60,7 @@ class DistanceField {
   double resolution_ = 0.0;
   Vec<2> origin_ = Vec<2>::Zero();
   double max_distance_ = 0.0;
-  int pad_ = 2;                ///< cells of max_distance around the grid (bicubic reads +-2)
+  int pad_ = 2;  ///< free cells around the grid in the transform (>= max_distance + 3 cells)
   std::vector<float> padded_;  ///< (width + 2 pad) x (height + 2 pad), row-major, row 0 lowest y
   int padded_width_ = 0;
   double inv_resolution_ = 0.0;  ///< cells per metre: distance() multiplies, never divides

@@ -1,0 +1,162 @@
+// `implicit mcl --sensor laser`: laser scans on an occupancy grid, by the semi-synthetic protocol
+// on a CARMEN log (docs/cli.md, "Laser localization").
+#include "cmd_mcl_laser.hpp"
+
+#include <fstream>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "implicit/core/error.hpp"
+
+namespace implicit::app {
+
+void add_laser_options(CLI::App& sub, LaserCommand& l) {
+  auto& s = l.settings;
+  sub.add_option("--sensor", l.sensor,
+                 "landmark: range-bearing detections of point landmarks (Car Park, robot logs); "
+                 "laser: 2-D laser scans on an occupancy grid (--data a CARMEN log)")
+      ->check(CLI::IsMember({"landmark", "laser"}))
+      ->capture_default_str();
+  sub.add_option("--alphas", l.alphas,
+                 "laser: alpha1..alpha4 of the odometry synthesised from the reference poses "
+                 "(nav2's names; default 0.05 each)")
+      ->expected(4)
+      ->check(in_range(0.0, 10.0));
+  sub.add_option("--filter-alphas", l.filter_alphas,
+                 "laser: alpha1..alpha4 of the filter's odometry model (default: --alphas)")
+      ->expected(4)
+      ->check(in_range(0.0, 10.0));
+  sub.add_option("--z-hit", s.laser.z_hit, "laser: weight of the hit component")
+      ->check(in_range(1e-9, 1e6))
+      ->capture_default_str();
+  sub.add_option("--z-rand", s.laser.z_rand, "laser: weight of the uniform component")
+      ->check(in_range(0.0, 1e6))
+      ->capture_default_str();
+  sub.add_option("--sigma-hit", s.laser.sigma_hit, "laser: [m] std of a hit")
+      ->check(in_range(1e-4, 100.0))
+      ->capture_default_str();
+  sub.add_option("--max-beams", s.laser.max_beams, "laser: beams used per scan")
+      ->check(in_range(1, 100000))
+      ->capture_default_str();
+  sub.add_option("--laser-max-dist", s.laser.laser_likelihood_max_dist,
+                 "laser: [m] distances to the nearest obstacle are capped here "
+                 "(nav2's laser_likelihood_max_dist)")
+      ->check(in_range(1e-3, 100.0))
+      ->capture_default_str();
+  sub.add_option("--laser-max-range", s.laser.laser_max_range,
+                 "laser: [m] readings at or beyond are no return; <= 0: the log's")
+      ->check(in_range(-1.0, 1e4));
+  sub.add_option("--interpolation", l.interpolation,
+                 "laser: distance field between cell centres: nearest (AMCL's lookup; bootstrap "
+                 "only), bilinear, bicubic (C1; the implicit proposal's default)")
+      ->check(CLI::IsMember({"nearest", "bilinear", "bicubic"}))
+      ->capture_default_str();
+  sub.add_option("--aggregation", l.aggregation,
+                 "laser: product (the likelihood) or cubed-sum (nav2's 1 + sum p^3; bootstrap "
+                 "only, for parity)")
+      ->check(CLI::IsMember({"product", "cubed-sum"}))
+      ->capture_default_str();
+  sub.add_option("--update-min-d", s.data.update_min_d,
+                 "laser: [m] update after this much travel (nav2's update_min_d)")
+      ->check(in_range(0.0, 100.0))
+      ->capture_default_str();
+  sub.add_option("--update-min-a", s.data.update_min_a,
+                 "laser: [rad] or after this much turning (nav2's update_min_a)")
+      ->check(in_range(0.0, 10.0))
+      ->capture_default_str();
+  sub.add_option("--map-resolution", s.data.map_resolution,
+                 "laser: [m] cell size of the map built from the reference poses (no map file)")
+      ->check(in_range(0.005, 1.0))
+      ->capture_default_str();
+  sub.add_option("--max-updates", s.data.max_updates, "laser: use the first N updates (0: all)")
+      ->check(in_range(0, 100000000));
+  sub.add_option("--global-updates", s.global_updates,
+                 "laser, --init global: a start succeeds if the error is below "
+                 "--global-radius from this update on")
+      ->check(in_range(1, 100000))
+      ->capture_default_str();
+  sub.add_option("--global-radius", s.global_success_radius,
+                 "laser, --init global: [m] success radius")
+      ->check(in_range(1e-3, 100.0))
+      ->capture_default_str();
+  sub.add_option("--trajectory", l.trajectory,
+                 "laser: write the first run's estimate as a TUM trajectory file (t x y z qx qy qz "
+                 "qw)");
+}
+
+namespace {
+
+robot::OdometryAlphas alphas_of(const std::vector<double>& v, const robot::OdometryAlphas& d) {
+  if (v.empty()) return d;
+  return {v[0], v[1], v[2], v[3]};
+}
+
+void write_tum(const std::string& file, const experiments::LaserMclResult& r,
+               const experiments::LaserDataset& d) {
+  OutputFile out(file);
+  const auto& est = r.runs.front().estimates;
+  for (std::size_t k = 0; k < est.size(); ++k) {
+    const double h = 0.5 * est[k](2);
+    out.stream() << fmt::format("{:.6f} {:.6f} {:.6f} 0 0 0 {:.9f} {:.9f}\n", d.scans[k].time,
+                                est[k](0), est[k](1), std::sin(h), std::cos(h));
+  }
+  out.commit();
+}
+
+}  // namespace
+
+void run_laser_mcl_command(const MclSettings& shared, const std::string& map_file,
+                           LaserCommand& l, const RunContext& ctx, bool allow_empty) {
+  auto& s = l.settings;
+  require(!shared.data_dir.empty(),
+          "mcl --sensor laser: expected --data naming a CARMEN laser log (e.g. "
+          "data/carmen/intel-corrected.log.gz)");
+  s.data.data = shared.data_dir;
+  s.data.map = map_file;
+  s.proposal = experiments::parse_proposal(shared.method);
+  s.implicit_map =
+      shared.map == "random" ? filter::ImplicitMap::kRandom : filter::ImplicitMap::kLinear;
+  s.particles = static_cast<std::size_t>(shared.particles);
+  s.runs = shared.runs;
+  s.seed = ctx.seed;
+  s.start = experiments::parse_start(shared.init);
+  s.odometry_noise = alphas_of(l.alphas, s.odometry_noise);
+  s.filter_alphas = alphas_of(l.filter_alphas, s.odometry_noise);
+  s.laser.interpolation = experiments::parse_interpolation(l.interpolation);
+  s.laser.aggregation = l.aggregation == "cubed-sum" ? robot::BeamAggregation::kCubedSum
+                                                     : robot::BeamAggregation::kProduct;
+  s.keep_tracks = !l.trajectory.empty();
+  const experiments::LaserDataset data = experiments::load_laser_dataset(s.data);
+  Progress bar("laser MCL runs", static_cast<std::size_t>(s.runs), ctx.show_progress());
+  const auto r = experiments::run_laser_mcl(s, data, [&](int, int) { bar.tick(); });
+  bar.finish();
+  if (!l.trajectory.empty()) write_tum(l.trajectory, r, data);
+  nlohmann::json j = experiments::to_json(r);
+  if (!ctx.out_dir.empty()) {
+    OutputFile out(ctx.csv_path("laser_mcl.json"));
+    out.stream() << j.dump(2) << "\n";
+    out.commit();
+  }
+  if (ctx.json) {
+    print_json(j);
+  } else {
+    fmt::print(
+        "laser MCL on {}: {} proposal, M = {}, {} run{}, {} updates of {} scans\n"
+        "  position RMSE {:.3f} ± {:.3f} m (median {:.3f}), heading RMSE {:.4f} rad, lost runs "
+        "{}\n"
+        "  ESS/M {:.2f}, {:.1f} us per update ({:.3f} us per particle), {:.1f} s\n",
+        r.data_name, experiments::to_string(s.proposal), s.particles, s.runs,
+        s.runs == 1 ? "" : "s", r.updates, r.scans_in_log, r.position_rmse_m.mean,
+        r.position_rmse_m.se, r.position_rmse_m.median, r.heading_rmse_rad.mean, r.lost_runs,
+        r.ess_fraction.mean, r.cpu_us_per_update.mean,
+        r.cpu_us_per_update.mean / static_cast<double>(s.particles), r.seconds);
+    if (s.start == experiments::StartKind::kGlobal)
+      fmt::print("  global starts: success rate {:.2f} within {} updates\n",
+                 r.global_success_rate, s.global_updates);
+  }
+  require_scored(j, "mcl", {}, {}, allow_empty);
+}
+
+}  // namespace implicit::app

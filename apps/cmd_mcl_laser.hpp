@@ -1,0 +1,34 @@
+#pragma once
+// `implicit mcl --sensor laser`: the laser options of the mcl subcommand and their run
+// (experiments/laser_mcl.hpp does the work).
+
+#include <string>
+#include <vector>
+
+#include "context.hpp"
+#include "experiments.hpp"
+#include "experiments/laser_mcl.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace implicit::app {
+
+struct LaserCommand {
+  std::string sensor = "landmark";  ///< landmark | laser
+  experiments::LaserMclSettings settings;
+  std::vector<double> alphas, filter_alphas;
+  std::string interpolation = "bicubic", aggregation = "product";
+  std::string trajectory;  ///< TUM file of the first run's estimate
+};
+
+/// Adds --sensor and the laser's options to the mcl subcommand.
+void add_laser_options(CLI::App& sub, LaserCommand& laser);
+
+/// Runs laser MCL with the mcl subcommand's shared settings (method, particles, runs, data,
+/// map file, init, seed) and the laser options; prints JSON or a summary.
+void run_laser_mcl_command(const MclSettings& shared, const std::string& map_file,
+                           LaserCommand& laser, const RunContext& ctx, bool allow_empty);
+
+}  // namespace implicit::app

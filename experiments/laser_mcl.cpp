@@ -1,0 +1,297 @@
+// Runs of laser MCL on a prepared dataset (laser_mcl.hpp): tracking from a known start, and
+// global starts, with either proposal.
+#include "experiments/laser_mcl.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <memory>
+#include <numeric>
+
+#include "experiments/laser_global.hpp"
+#include "implicit/core/error.hpp"
+#include "implicit/core/weights.hpp"
+#include "implicit/filter/monte_carlo_localization.hpp"
+#include "implicit/robot/distance_field.hpp"
+
+namespace implicit::experiments {
+
+void LaserMclSettings::validate() const {
+  require(particles >= 1 && particles <= 10'000'000,
+          "laser MCL: expected 1 to 10000000 particles, got {}", particles);
+  require(runs >= 1 && runs <= 100000, "laser MCL: expected 1 to 100000 runs, got {}", runs);
+  odometry_noise.validate();
+  filter_alphas.validate();
+  laser.validate();
+  require(resample_threshold >= 0 && resample_threshold <= 1,
+          "laser MCL: expected a resampling threshold in [0, 1], got {}", resample_threshold);
+  require(initial_std_xy > 0 && std::isfinite(initial_std_xy) && initial_std_heading > 0 &&
+              std::isfinite(initial_std_heading),
+          "laser MCL: expected a positive initial spread, got {} m and {} rad", initial_std_xy,
+          initial_std_heading);
+  require(lost_threshold > 0 && std::isfinite(lost_threshold),
+          "laser MCL: expected a positive lost threshold, got {} m", lost_threshold);
+  require(global_success_radius > 0 && std::isfinite(global_success_radius),
+          "laser MCL: expected a positive global success radius, got {} m", global_success_radius);
+  require(global_updates >= 1, "laser MCL: expected global_updates >= 1, got {}", global_updates);
+}
+
+namespace {
+
+using Model = robot::LikelihoodFieldModel;
+using Motion = robot::OdometryModel;
+
+double seconds_of_cpu() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+struct Track {
+  std::vector<robot::Pose> estimates;
+  std::vector<double> ess_fraction, particles, newton;
+  int fallbacks = 0, failures = 0;
+  double cpu_seconds = 0.0;
+  std::size_t updates = 0;
+};
+
+/// Runs one filter over updates [first, last] (the filter starts at update `first`, already
+/// initialised there) and records the estimate at each update.
+template <typename Filter>
+void follow(Filter& pf, const LaserDataset& d, const std::vector<Vec<3>>& odometry,
+            std::size_t first, std::size_t last, Track& t) {
+  for (std::size_t k = first + 1; k <= last; ++k) {
+    const double c0 = seconds_of_cpu();
+    const filter::StepSummary& s =
+        pf.step(odometry[k], d.scans[k], "laser update " + std::to_string(k));
+    t.cpu_seconds += seconds_of_cpu() - c0;
+    ++t.updates;
+    t.estimates.push_back(s.mean);
+    t.ess_fraction.push_back(s.ess / static_cast<double>(s.particles));
+    t.particles.push_back(static_cast<double>(s.particles));
+    t.newton.push_back(s.newton_evaluations);
+    t.fallbacks += s.fallbacks;
+    t.failures += s.failures;
+  }
+}
+
+template <typename Proposal>
+Track run_one(const LaserMclSettings& s, const LaserDataset& d, const Model& model,
+              Proposal proposal, std::uint64_t seed, std::size_t first, std::size_t last) {
+  const std::vector<Vec<3>> odometry = synthesise_odometry(d.reference, s.odometry_noise, seed);
+  filter::FilterOptions o;
+  o.particles = s.particles;
+  o.seed = seed;
+  o.resample_threshold = s.resample_threshold;
+  filter::MonteCarloLocalization pf(Motion(s.filter_alphas), model, proposal, o);
+  Track t;
+  if (s.start == StartKind::kKnown) {
+    const Vec<3> sd(s.initial_std_xy, s.initial_std_xy, s.initial_std_heading);
+    // The start is drawn around the reference: its offset is part of the run's randomness.
+    Rng rng({seed, 0, 1, purpose::kInitial});
+    const Vec<3> xi = rng.normal_vector<3>();
+    const robot::Pose start = d.reference[first] + (sd.array() * xi.array()).matrix();
+    pf.initialize(start, Mat<3>(sd.array().square().matrix().asDiagonal()));
+    t.estimates.push_back(start);
+  } else {
+    const GlobalStart g = global_start(model, d.map, d.scans[first], s.particles,
+                                       s.proposal == ProposalKind::kImplicit, seed);
+    pf.initialize(g.particles, g.log_weights);
+    t.estimates.push_back(pf.last().mean);
+  }
+  t.ess_fraction.push_back(1.0);
+  follow(pf, d, odometry, first, last, t);
+  return t;
+}
+
+/// The run's scores from its track against the reference of updates [first, ...].
+LaserMclRun score(const LaserMclSettings& s, const LaserDataset& d, const Track& t,
+                  std::uint64_t seed, std::size_t first) {
+  LaserMclRun r;
+  r.seed = seed;
+  double sum_p = 0.0, sum_h = 0.0;
+  int converged_from = -1;
+  for (std::size_t i = 0; i < t.estimates.size(); ++i) {
+    const robot::Pose& ref = d.reference[first + i];
+    const double e = (t.estimates[i].head<2>() - ref.head<2>()).norm();
+    const double h = std::abs(wrap_angle(t.estimates[i](2) - ref(2)));
+    sum_p += e * e;
+    sum_h += h * h;
+    const bool good = e < s.global_success_radius && h < 0.3;
+    if (!good)
+      converged_from = -1;
+    else if (converged_from < 0)
+      converged_from = static_cast<int>(i);
+    if (s.keep_tracks) r.errors_m.push_back(e);
+  }
+  const double n = static_cast<double>(t.estimates.size());
+  r.position_rmse_m = std::sqrt(sum_p / n);
+  r.heading_rmse_rad = std::sqrt(sum_h / n);
+  const robot::Pose& final_ref = d.reference[first + t.estimates.size() - 1];
+  r.final_error_m = (t.estimates.back().head<2>() - final_ref.head<2>()).norm();
+  r.lost = r.final_error_m > s.lost_threshold;
+  r.updates_to_converge = converged_from;
+  r.global_success = converged_from >= 0 && converged_from <= s.global_updates;
+  auto mean = [](const std::vector<double>& v) {
+    return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+  };
+  r.ess_fraction_mean = mean(t.ess_fraction);
+  r.particles_mean = mean(t.particles);
+  r.newton_evaluations_mean = mean(t.newton);
+  r.cpu_us_per_update = t.updates ? 1e6 * t.cpu_seconds / static_cast<double>(t.updates) : 0.0;
+  r.fallbacks = t.fallbacks;
+  r.failures = t.failures;
+  if (s.keep_tracks) r.estimates = t.estimates;
+  return r;
+}
+
+MeanSe mean_se(const std::vector<LaserMclRun>& runs, double LaserMclRun::*field) {
+  std::vector<double> v;
+  for (const LaserMclRun& r : runs) v.push_back(r.*field);
+  MeanSe m;
+  const double n = static_cast<double>(v.size());
+  m.mean = std::accumulate(v.begin(), v.end(), 0.0) / n;
+  double q = 0.0;
+  for (double x : v) q += (x - m.mean) * (x - m.mean);
+  m.se = v.size() > 1 ? std::sqrt(q / (n - 1.0) / n) : 0.0;
+  std::sort(v.begin(), v.end());
+  m.median = v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  return m;
+}
+
+}  // namespace
+
+LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDataset& d,
+                             const Progress& progress) {
+  settings.validate();
+  require(d.scans.size() >= 2 && d.scans.size() == d.reference.size(),
+          "laser MCL: expected a dataset with at least 2 updates");
+  const auto wall0 = std::chrono::steady_clock::now();
+  auto field = std::make_shared<const robot::DistanceField>(
+      d.map, settings.laser.laser_likelihood_max_dist);
+  const Model model(field, settings.laser, d.mount);
+  LaserMclResult result;
+  result.settings = settings;
+  result.data_name = d.name;
+  result.scans_in_log = d.scans_in_log;
+  result.updates = d.scans.size();
+  result.map_width = d.map.width();
+  result.map_height = d.map.height();
+  result.map_resolution = d.map.resolution();
+  result.map_built = d.map_built;
+  const std::size_t n = d.scans.size();
+  for (int run = 0; run < settings.runs; ++run) {
+    const std::uint64_t seed = settings.seed + static_cast<std::uint64_t>(run);
+    // Tracking runs cover the whole log; global runs start spread over it (run r at update
+    // r n / runs) and last global_updates updates past the first.
+    std::size_t first = 0, last = n - 1;
+    if (settings.start == StartKind::kGlobal) {
+      const auto span = static_cast<std::size_t>(settings.global_updates);
+      require(n > span, "laser MCL: a global start needs more than {} updates, the log has {}",
+              span, n);
+      first = static_cast<std::size_t>(run) * (n - span) / static_cast<std::size_t>(settings.runs);
+      last = first + span;
+    }
+    const Track t = settings.proposal == ProposalKind::kImplicit
+                        ? [&] {
+                            filter::ImplicitProposal p;
+                            p.map = settings.implicit_map;
+                            return run_one(settings, d, model, p, seed, first, last);
+                          }()
+                        : run_one(settings, d, model, filter::BootstrapProposal{}, seed, first, last);
+    result.runs.push_back(score(settings, d, t, seed, first));
+    if (progress) progress(run + 1, settings.runs);
+  }
+  result.position_rmse_m = mean_se(result.runs, &LaserMclRun::position_rmse_m);
+  result.heading_rmse_rad = mean_se(result.runs, &LaserMclRun::heading_rmse_rad);
+  result.cpu_us_per_update = mean_se(result.runs, &LaserMclRun::cpu_us_per_update);
+  result.ess_fraction = mean_se(result.runs, &LaserMclRun::ess_fraction_mean);
+  for (const LaserMclRun& r : result.runs) {
+    result.lost_runs += r.lost ? 1 : 0;
+    result.global_success_rate += r.global_success ? 1.0 / settings.runs : 0.0;
+  }
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return result;
+}
+
+LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const Progress& progress) {
+  settings.validate();
+  return run_laser_mcl(settings, load_laser_dataset(settings.data), progress);
+}
+
+namespace {
+nlohmann::json to_json(const MeanSe& m) {
+  return {{"mean", m.mean}, {"se", m.se}, {"median", m.median}};
+}
+}  // namespace
+
+nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
+  const LaserMclSettings& s = r.settings;
+  nlohmann::json j;
+  j["experiment"] = "laser_mcl";
+  j["data"] = r.data_name;
+  j["proposal"] = to_string(s.proposal);
+  j["implicit_map"] = s.implicit_map == filter::ImplicitMap::kLinear ? "linear" : "random";
+  j["start"] = to_string(s.start);
+  j["particles"] = s.particles;
+  j["runs"] = s.runs;
+  j["seed"] = s.seed;
+  j["scans_in_log"] = r.scans_in_log;
+  j["updates"] = r.updates;
+  j["map"] = {{"width", r.map_width}, {"height", r.map_height},
+              {"resolution", r.map_resolution}, {"built_from_reference", r.map_built}};
+  const auto alphas = [](const robot::OdometryAlphas& a) {
+    return nlohmann::json{{"alpha1", a.alpha1}, {"alpha2", a.alpha2}, {"alpha3", a.alpha3},
+                          {"alpha4", a.alpha4}};
+  };
+  j["odometry_noise"] = alphas(s.odometry_noise);
+  j["filter_alphas"] = alphas(s.filter_alphas);
+  j["laser"] = {{"z_hit", s.laser.z_hit},
+                {"z_rand", s.laser.z_rand},
+                {"sigma_hit", s.laser.sigma_hit},
+                {"laser_likelihood_max_dist", s.laser.laser_likelihood_max_dist},
+                {"max_beams", s.laser.max_beams},
+                {"interpolation", to_string(s.laser.interpolation)}};
+  j["update_min_d"] = s.data.update_min_d;
+  j["update_min_a"] = s.data.update_min_a;
+  j["position_rmse_m"] = to_json(r.position_rmse_m);
+  j["heading_rmse_rad"] = to_json(r.heading_rmse_rad);
+  j["cpu_us_per_update"] = to_json(r.cpu_us_per_update);
+  j["cpu_us_per_update_per_particle"] =
+      r.cpu_us_per_update.mean / static_cast<double>(std::max<std::size_t>(s.particles, 1));
+  j["ess_fraction"] = to_json(r.ess_fraction);
+  j["lost_runs"] = r.lost_runs;
+  if (s.start == StartKind::kGlobal) {
+    j["global_success_rate"] = r.global_success_rate;
+    j["global_updates"] = s.global_updates;
+    j["global_success_radius_m"] = s.global_success_radius;
+  }
+  j["seconds"] = r.seconds;
+  nlohmann::json runs = nlohmann::json::array();
+  for (const LaserMclRun& run : r.runs) {
+    nlohmann::json x = {{"seed", run.seed},
+                        {"position_rmse_m", run.position_rmse_m},
+                        {"heading_rmse_rad", run.heading_rmse_rad},
+                        {"final_error_m", run.final_error_m},
+                        {"lost", run.lost},
+                        {"ess_fraction_mean", run.ess_fraction_mean},
+                        {"particles_mean", run.particles_mean},
+                        {"cpu_us_per_update", run.cpu_us_per_update},
+                        {"newton_evaluations_mean", run.newton_evaluations_mean},
+                        {"fallbacks", run.fallbacks},
+                        {"failures", run.failures}};
+    if (s.start == StartKind::kGlobal) {
+      x["global_success"] = run.global_success;
+      x["updates_to_converge"] = run.updates_to_converge;
+    }
+    if (include_tracks) {
+      nlohmann::json est = nlohmann::json::array();
+      for (const robot::Pose& p : run.estimates) est.push_back({p(0), p(1), p(2)});
+      x["estimates"] = est;
+      x["errors_m"] = run.errors_m;
+    }
+    runs.push_back(x);
+  }
+  j["per_run"] = runs;
+  return j;
+}
+
+}  // namespace implicit::experiments
