@@ -21,7 +21,7 @@ void add_laser_options(CLI::App& sub, LaserCommand& l) {
       ->capture_default_str();
   sub.add_option("--alphas", l.alphas,
                  "laser: alpha1..alpha4 of the odometry synthesised from the reference poses "
-                 "(nav2's names; default 0.05 each)")
+                 "(nav2's names; default 0.02 each)")
       ->expected(4)
       ->check(in_range(0.0, 10.0));
   sub.add_option("--filter-alphas", l.filter_alphas,
@@ -80,6 +80,11 @@ void add_laser_options(CLI::App& sub, LaserCommand& l) {
   sub.add_option("--global-radius", s.global_success_radius,
                  "laser, --init global: [m] success radius")
       ->check(in_range(1e-3, 100.0))
+      ->capture_default_str();
+  sub.add_option("--starts", s.implicit_starts,
+                 "laser, implicit: Newton starts per particle (the prediction, and draws from the "
+                 "motion prior); the lowest minimum centres the proposal (weights stay exact)")
+      ->check(in_range(1, 64))
       ->capture_default_str();
   sub.add_option("--trajectory", l.trajectory,
                  "laser: write the first run's estimate as a TUM trajectory file (t x y z qx qy qz "

@@ -21,6 +21,8 @@ void LaserMclSettings::validate() const {
   require(particles >= 1 && particles <= 10'000'000,
           "laser MCL: expected 1 to 10000000 particles, got {}", particles);
   require(runs >= 1 && runs <= 100000, "laser MCL: expected 1 to 100000 runs, got {}", runs);
+  require(implicit_starts >= 1 && implicit_starts <= 64,
+          "laser MCL: expected 1 to 64 Newton starts per particle, got {}", implicit_starts);
   odometry_noise.validate();
   filter_alphas.validate();
   laser.validate();
@@ -193,6 +195,7 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
                         ? [&] {
                             filter::ImplicitProposal p;
                             p.map = settings.implicit_map;
+                            p.starts = settings.implicit_starts;
                             return run_one(settings, d, model, p, seed, first, last);
                           }()
                         : run_one(settings, d, model, filter::BootstrapProposal{}, seed, first, last);
@@ -231,6 +234,7 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
   j["proposal"] = to_string(s.proposal);
   j["implicit_map"] = s.implicit_map == filter::ImplicitMap::kLinear ? "linear" : "random";
   j["start"] = to_string(s.start);
+  j["implicit_starts"] = s.implicit_starts;
   j["particles"] = s.particles;
   j["runs"] = s.runs;
   j["seed"] = s.seed;

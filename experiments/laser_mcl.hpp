@@ -83,12 +83,13 @@ struct LaserMclSettings {
   LaserDataOptions data;
   ProposalKind proposal = ProposalKind::kImplicit;
   filter::ImplicitMap implicit_map = filter::ImplicitMap::kLinear;
+  int implicit_starts = 2;  ///< Newton starts per particle (ImplicitProposal::starts)
   std::size_t particles = 100;
   int runs = 10;
   std::uint64_t seed = 1;
   /// The synthesised odometry's noise, and the filter's motion model (the same by default).
-  robot::OdometryAlphas odometry_noise{0.05, 0.05, 0.05, 0.05};
-  robot::OdometryAlphas filter_alphas{0.05, 0.05, 0.05, 0.05};
+  robot::OdometryAlphas odometry_noise{0.02, 0.02, 0.02, 0.02};
+  robot::OdometryAlphas filter_alphas{0.02, 0.02, 0.02, 0.02};
   robot::LikelihoodFieldParams laser;
   double resample_threshold = 0.5;
   StartKind start = StartKind::kKnown;

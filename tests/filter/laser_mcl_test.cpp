@@ -43,6 +43,12 @@ struct LaserSetup {
     p.max_beams = 24;
     return p;
   }();
+  /// A weaker observation (8 beams): its posterior is wide enough for a 3-D quadrature grid.
+  robot::LikelihoodFieldParams weak = [] {
+    robot::LikelihoodFieldParams p;
+    p.max_beams = 8;
+    return p;
+  }();
   robot::LikelihoodFieldModel model{field, params};
   robot::ScanSimulationOptions sim = [] {
     robot::ScanSimulationOptions o;
@@ -95,6 +101,7 @@ MonteCarloLocalization<IncrementModel, robot::LikelihoodFieldModel, Proposal> ma
 
 TEST(LaserMcl, OneUpdateMatchesTheGridIntegralForBothProposals) {
   LaserSetup s;
+  s.model = robot::LikelihoodFieldModel(s.field, s.weak);
   const Pose x0(2.0, 1.6, 0.3);
   const Vec<3> u(0.3, 0.05, 0.1);
   const Pose truth = robot::compose(x0, u) + Pose(0.03, -0.02, 0.01);

@@ -9,6 +9,15 @@
 //
 // Both use the same Gaussian transition, so they target the same posterior; the implicit
 // increment's expectation over xi is the predictive likelihood p(z | X_{n-1}).
+//
+// Several starts. A scan's -log p(z | x) has local minima (a corridor seen from the wrong
+// place, a wall one cell off), and the minimum nearest the prediction f need not be the one
+// that matters when the odometry is poor. With `starts` > 1 the implicit proposal also runs
+// Newton from starts - 1 poses drawn from the prior N(f, Sigma1) and centres the map at the
+// lowest minimum found. The weights stay exact: the starts s are drawn first, x ~ q(x | s) =
+// N(mu(s), H(s)^-1), and w = p(x | x') p(z | x) / q(x | s) has expectation
+// E_s[ integral p(x | x') p(z | x) dx ] = p(z | x') for every function mu(s), H(s) (importance
+// sampling on the space (s, x) with the target p(x | x', z) q(s)).
 
 #include <cmath>
 #include <limits>
@@ -72,8 +81,8 @@ double bootstrap_step(const ObservationContext<Motion, Observation>& ctx,
 
 template <typename Motion, typename Observation, typename Stats, typename MapKind>
 double implicit_step(const ObservationContext<Motion, Observation>& ctx, MapKind map,
-                     const NewtonOptions& newton, const robot::Pose& previous, Rng& rng,
-                     robot::Pose& next, Stats& st) {
+                     const NewtonOptions& newton, int starts, const robot::Pose& previous,
+                     Rng& rng, robot::Pose& next, Stats& st) {
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
   robot::Pose f;
   robot::Mat3 sigma1_full;
@@ -92,8 +101,20 @@ double implicit_step(const ObservationContext<Motion, Observation>& ctx, MapKind
   const double constant = 1.5 * kLog2Pi + sigma1.log_det_L();  // 1/2 log det(2 pi Sigma1)
   PoseObjective<Observation> obj;
   obj.reset(*ctx.observation, *ctx.z, f, prior_information, constant);
-  const NewtonMinimum<SmallFactor<3>> nr = newton_minimize<SmallFactor<3>>(obj, f, newton);
+  NewtonMinimum<SmallFactor<3>> nr = newton_minimize<SmallFactor<3>>(obj, f, newton);
   st.iterations += nr.evaluations;
+  // Further starts drawn from the prior: the centre is the lowest minimum found. The weights
+  // stay exact, since the starts are auxiliary randomness drawn before x and the weight divides
+  // by the density of x given them (see the file comment).
+  for (int k = 1; k < starts; ++k) {
+    const Vec<3> eta = rng.normal_vector<3>();
+    const robot::Pose x0 = f + sigma1.matrixL() * eta;
+    NewtonMinimum<SmallFactor<3>> other = newton_minimize<SmallFactor<3>>(obj, x0, newton);
+    st.iterations += other.evaluations;
+    if (other.factor_ok && std::isfinite(other.value) &&
+        (!nr.factor_ok || !std::isfinite(nr.value) || other.value < nr.value))
+      nr = other;
+  }
   st.fallback = st.fallback || !nr.exact_factor;
   const bool usable_minimum = nr.factor_ok && nr.status != MinimizeStatus::kNonFinite &&
                               std::isfinite(nr.value) && std::isfinite(nr.factor.log_det_L());

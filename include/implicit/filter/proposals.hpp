@@ -209,12 +209,15 @@ struct ImplicitProposal {
   NewtonOptions newton = mcl_newton_options();
   /// Newton's rules for observation models with a Gauss-Newton matrix (laser scans).
   NewtonOptions scan_newton = scan_newton_options();
+  /// Observation models: Newton starts per particle, the prediction and starts - 1 draws from
+  /// the prior; the lowest minimum centres the map (observation_proposals.hpp).
+  int starts = 2;
 
   /// The same proposal for a filter on an observation model (observation_proposals.hpp).
   template <typename Motion, typename Observation>
   double propose(const ObservationContext<Motion, Observation>& ctx, const Pose& previous,
                  Rng& rng, Pose& next, ParticleStats& st) const {
-    return detail::implicit_step(ctx, map, scan_newton, previous, rng, next, st);
+    return detail::implicit_step(ctx, map, scan_newton, starts, previous, rng, next, st);
   }
 
   template <typename Motion, typename Sensor>
