@@ -33,6 +33,9 @@
 #include "implicit/robot/occupancy_grid.hpp"
 
 namespace implicit::robot {
+namespace detail {
+struct FieldLookup;
+}
 
 enum class Interpolation { kNearest, kBilinear, kBicubic };
 
@@ -56,6 +59,10 @@ class DistanceField {
   double distance(const Vec<2>& p, Interpolation mode, Vec<2>* gradient = nullptr) const;
 
  private:
+  // The likelihood field evaluates whole scans with the lookups of lookup() inlined into its
+  // loops (likelihood_field.cpp), and tabulates its beam density over the cells.
+  friend class LikelihoodFieldModel;
+
   int width_ = 0, height_ = 0;
   double resolution_ = 0.0;
   Vec<2> origin_ = Vec<2>::Zero();
@@ -76,8 +83,8 @@ class DistanceField {
     return padded_[static_cast<std::size_t>(py) * static_cast<std::size_t>(padded_width_) +
                    static_cast<std::size_t>(px)];
   }
-  /// The n x n cells from (ix, iy) up, row by row, into out[j * n + i].
-  void gather(int ix, int iy, int n, float* out) const;
+  /// The cells and constants for the per-point lookups (distance_field_kernels.hpp in src/).
+  detail::FieldLookup lookup() const;
   double outside(double u, double v, Vec<2>* gradient) const;
 };
 

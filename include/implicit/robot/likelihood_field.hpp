@@ -64,15 +64,29 @@ struct LikelihoodFieldParams {
   void validate() const;
 };
 
+/// The log density of a beam ending in each cell of a distance field, for one maximum range:
+/// what nearest-cell interpolation reads instead of evaluating the density per beam. Laid out
+/// as the field's padded cells; as float, whose rounding (2^-24 of |log(z_rand / z_max)| at
+/// most) is below that of the distances the field stores as float.
+struct CellLogDensity {
+  double z_max = 0.0;
+  std::vector<float> cells;
+  float outside = 0.0f;         ///< beyond the field's cells: the density at the capped distance
+  const void* owner = nullptr;  ///< the model that built it (shared with its copies)
+};
+
 /// The end points of one scan's used beams in the robot frame, and the constants of its beam
 /// density: computed once per scan, shared by every particle.
 struct PreparedScan {
-  std::vector<Vec<2>> end_points;  ///< e_i in the robot frame [m]
-  double z_max = 0.0;              ///< the maximum range this scan was read with [m]
-  double log_hit_scale = 0.0;      ///< log(z_hit / (sqrt(2 pi) sigma_hit))
-  double rand_density = 0.0;       ///< z_rand / z_max
-  std::size_t skipped_no_return = 0;   ///< readings at or above the maximum range
-  std::size_t skipped_short = 0;       ///< readings below the minimum range
+  std::vector<Vec<2>> end_points;     ///< e_i in the robot frame [m]
+  double z_max = 0.0;                 ///< the maximum range this scan was read with [m]
+  double log_hit_scale = 0.0;         ///< log(z_hit / (sqrt(2 pi) sigma_hit))
+  double rand_density = 0.0;          ///< z_rand / z_max
+  std::size_t skipped_no_return = 0;  ///< readings at or above the maximum range
+  std::size_t skipped_short = 0;      ///< readings below the minimum range
+  /// Nearest-cell interpolation with the product aggregation: the beam density per cell, shared
+  /// by every scan with this z_max (null otherwise).
+  std::shared_ptr<const CellLogDensity> cell_log_density;
   std::size_t size() const { return end_points.size(); }
 };
 
@@ -112,19 +126,29 @@ class LikelihoodFieldModel {
   /// The log density of one beam whose end point is `distance` from the nearest obstacle.
   double beam_log_density(const PreparedScan& z, double distance) const {
     const double h = z.log_hit_scale - 0.5 * distance * distance * inv_var_;
-    // log(e^h + c), written to keep its precision where either term dominates.
-    const double c = z.rand_density;
-    if (c <= 0.0) return h;
-    const double lc = std::log(c);
-    return h > lc ? h + std::log1p(std::exp(lc - h)) : lc + std::log1p(std::exp(h - lc));
+    // e^h + c with c > 0 is correct to rounding whichever term dominates, and so is its log;
+    // without the uniform term (z_rand = 0) e^h would underflow far from the walls.
+    return z.rand_density > 0.0 ? std::log(std::exp(h) + z.rand_density) : h;
   }
 
  private:
+  struct CellTables;  // the CellLogDensity of each z_max seen, shared by copies of the model
+
+  std::shared_ptr<const CellLogDensity> cell_log_density(double z_max) const;
+  template <Interpolation Mode>
+  double interpolated_log_likelihood(const PreparedScan& z, const Pose& x) const;
+  template <Interpolation Mode>
+  double interpolated_negative_log_likelihood(const PreparedScan& z, const Pose& x,
+                                              Vec<3>* gradient, Mat3* gauss_newton) const;
+  double nearest_log_likelihood(const PreparedScan& z, const Pose& x) const;
+  double cubed_sum_log_likelihood(const PreparedScan& z, const Pose& x) const;
+
   std::shared_ptr<const DistanceField> field_;
   LikelihoodFieldParams p_;
   LaserMount mount_;
   double max_distance_ = 0.0;  ///< min(laser_likelihood_max_dist, field's cap)
   double inv_var_ = 0.0;       ///< 1 / sigma_hit^2
+  std::shared_ptr<CellTables> cell_tables_;
 };
 
 }  // namespace implicit::robot
