@@ -8,7 +8,8 @@
 //  * FilterUpdate/<proposal>/<interpolation>: one update step of MonteCarloLocalization with
 //    OdometryModel (prediction, weighting, normalisation, resampling when ESS < M / 2) on ONE
 //    thread, M = 1000 particles (reset, untimed, before each update); the counter evaluations
-//    is the implicit proposal's Newton evaluations per particle.
+//    is the implicit proposal's Newton evaluations per particle;
+//  * NearestTable/build: the one-time tabulation behind nearest-cell interpolation.
 // One iteration covers every particle of every benchmarked update (16 x 1000), so that every
 // benchmark does the same work: read the counter per_particle, the CPU time per particle.
 //
@@ -448,6 +449,17 @@ void filter_update(benchmark::State& state, Interpolation mode) {
   state.SetLabel(s.label);
 }
 
+/// The one-time cost of nearest-cell interpolation: a new model's first prepare() tabulates the
+/// beam density over every cell of the field (padded Intel map: 2127 x 2056 cells).
+void nearest_table(benchmark::State& state) {
+  const Scene& s = scene();
+  for (auto _ : state) {
+    const robot::LikelihoodFieldModel model(s.field, params(Interpolation::kNearest), s.mount);
+    benchmark::DoNotOptimize(model.prepare(s.scans[0], "scan").cell_log_density);
+  }
+  state.SetLabel(s.label);
+}
+
 /// The largest difference between the current model and the baseline over every particle, for
 /// log p and (bicubic) -log p with its derivatives; false when one exceeds what rounding allows.
 bool check_agreement() {
@@ -526,6 +538,7 @@ void register_all() {
       Interpolation::kBicubic);
   add("FilterUpdate/implicit/bicubic/current",
       filter_update<LikelihoodFieldModel, ImplicitProposal>, Interpolation::kBicubic);
+  add("NearestTable/build/current", nearest_table);
 }
 
 }  // namespace

@@ -46,8 +46,8 @@ std::shared_ptr<const DistanceField> wall_field(double max_distance = 2.0) {
 TEST(LikelihoodField, OneWallMapMatchesTheClosedFormAtCellCentres) {
   LikelihoodFieldParams p;
   p.max_beams = 1000;
-  for (Interpolation mode : {Interpolation::kNearest, Interpolation::kBilinear,
-                             Interpolation::kBicubic}) {
+  for (Interpolation mode :
+       {Interpolation::kNearest, Interpolation::kBilinear, Interpolation::kBicubic}) {
     p.interpolation = mode;
     LikelihoodFieldModel model(wall_field(), p);
     // Robot at the centre of cell (10, 20), heading 0: a beam straight ahead of length k * 0.1
@@ -105,7 +105,8 @@ TEST(LikelihoodField, GradientMatchesCentralDifferencesAndGaussNewtonIsPsd) {
   auto room = std::make_shared<const DistanceField>(testing::laser_room(8.0, 6.0, 0.05), 2.0);
   LikelihoodFieldModel model(room, p, LaserMount{0.2, 0.05, 0.1});
   LaserScan s = fan(90, 2.3);
-  for (std::size_t i = 0; i < s.ranges.size(); ++i) s.ranges[i] = 0.8 + 0.03 * static_cast<double>(i);
+  for (std::size_t i = 0; i < s.ranges.size(); ++i)
+    s.ranges[i] = 0.8 + 0.03 * static_cast<double>(i);
   const PreparedScan z = model.prepare(s);
   Rng rng({11, 0, 0, 0});
   for (int k = 0; k < 40; ++k) {
@@ -121,12 +122,101 @@ TEST(LikelihoodField, GradientMatchesCentralDifferencesAndGaussNewtonIsPsd) {
       const double fd = (model.negative_log_likelihood(z, xp, nullptr, nullptr) -
                          model.negative_log_likelihood(z, xm, nullptr, nullptr)) /
                         (2 * step);
-      EXPECT_NEAR(g(a), fd, 1e-4 * (1.0 + std::abs(fd))) << "component " << a << " at " << x.transpose();
+      EXPECT_NEAR(g(a), fd, 1e-4 * (1.0 + std::abs(fd)))
+          << "component " << a << " at " << x.transpose();
     }
     EXPECT_LT((h - h.transpose()).norm(), 1e-12);
     const Eigen::SelfAdjointEigenSolver<Mat3> eig(h);
     EXPECT_GE(eig.eigenvalues().minCoeff(), -1e-9 * (1.0 + eig.eigenvalues().maxCoeff()));
   }
+}
+
+/// log p as the sum over beams of beam_log_density at the capped field distance of each end
+/// point: the model's definition, beam by beam, without its table or its product of densities.
+double sum_of_beam_densities(const LikelihoodFieldModel& model, const PreparedScan& z,
+                             const Pose& x, double* largest_term) {
+  const double c = std::cos(x(2)), s = std::sin(x(2));
+  const double cap =
+      std::min(model.params().laser_likelihood_max_dist, model.field().max_distance());
+  double total = 0.0;
+  *largest_term = 1.0;
+  for (const Vec<2>& e : z.end_points) {
+    const Vec<2> p(x(0) + c * e(0) - s * e(1), x(1) + s * e(0) + c * e(1));
+    const double d = std::min(model.field().distance(p, model.params().interpolation), cap);
+    const double term = model.beam_log_density(z, d);
+    *largest_term = std::max(*largest_term, std::abs(term));
+    total += term;
+  }
+  return total;
+}
+
+TEST(LikelihoodField, EqualsTheSumOfBeamDensitiesForEveryModeAndDensityForm) {
+  auto room = std::make_shared<const DistanceField>(testing::laser_room(8.0, 6.0, 0.05), 2.0);
+  LaserScan s = fan(400, 1.0);
+  for (std::size_t i = 0; i < s.ranges.size(); ++i)
+    s.ranges[i] = 0.5 + 4.0 * std::abs(std::sin(0.05 * static_cast<double>(i)));
+  // The default density; no uniform term (the log of e^h kept exact where e^h underflows:
+  // sigma 1 cm gives h = -20000 at the cap); a uniform term too small for the product of
+  // densities to stay a normal number (the logs are summed instead).
+  LikelihoodFieldParams base;
+  base.max_beams = 300;  // renormalises the product many times
+  LikelihoodFieldParams no_uniform = base;
+  no_uniform.z_rand = 0.0;
+  no_uniform.sigma_hit = 0.01;
+  LikelihoodFieldParams tiny_uniform = base;
+  tiny_uniform.z_rand = 1e-300;
+  Rng rng({5, 0, 0, 0});
+  for (const LikelihoodFieldParams& density : {base, no_uniform, tiny_uniform}) {
+    for (Interpolation mode :
+         {Interpolation::kNearest, Interpolation::kBilinear, Interpolation::kBicubic}) {
+      LikelihoodFieldParams p = density;
+      p.interpolation = mode;
+      const LikelihoodFieldModel model(room, p);
+      const PreparedScan z = model.prepare(s);
+      ASSERT_EQ(z.size(), 300u);
+      for (int k = 0; k < 30; ++k) {
+        // Inside the room, and (k >= 25) around and far outside the map.
+        const double spread = k < 25 ? 1.0 : 40.0;
+        const Pose x(4.0 + spread * 3.5 * (2 * rng.uniform() - 1),
+                     3.0 + spread * 2.5 * (2 * rng.uniform() - 1), 2 * kPi * rng.uniform());
+        double largest = 0.0;
+        const double expected = sum_of_beam_densities(model, z, x, &largest);
+        // Rounding: the nearest table holds each beam's density as a float (2^-24 relative);
+        // otherwise a few double roundings per beam, in the sum or in the product of densities.
+        const double per_beam =
+            mode == Interpolation::kNearest ? std::ldexp(1.0, -24) : 8 * std::ldexp(1.0, -52);
+        const double tolerance = per_beam * static_cast<double>(z.size()) * largest;
+        EXPECT_NEAR(model.log_likelihood(z, x), expected, tolerance)
+            << "mode " << static_cast<int>(mode) << ", z_rand " << p.z_rand << ", at "
+            << x.transpose();
+        if (mode != Interpolation::kNearest) {
+          EXPECT_NEAR(model.negative_log_likelihood(z, x, nullptr, nullptr), -expected, tolerance);
+        }
+      }
+      EXPECT_TRUE(std::isnan(model.log_likelihood(z, Pose(1.0, std::nan(""), 0.0))));
+      EXPECT_TRUE(std::isnan(model.log_likelihood(z, Pose(1.0, 1.0, std::nan("")))));
+    }
+  }
+}
+
+TEST(LikelihoodField, AScanPreparedByAnotherModelUsesItsConstantsNotItsTable) {
+  // Model a tabulates its beam density over the room; model b reads another map. A scan
+  // prepared by a must not be looked up in a's table with b's cells.
+  LikelihoodFieldParams p;
+  p.interpolation = Interpolation::kNearest;
+  p.max_beams = 50;
+  const LikelihoodFieldModel a(
+      std::make_shared<const DistanceField>(testing::laser_room(8.0, 6.0, 0.05), 2.0), p);
+  const LikelihoodFieldModel b(wall_field(), p);
+  const PreparedScan z = a.prepare(fan(50, 1.2));
+  ASSERT_NE(z.cell_log_density, nullptr);
+  const Pose x(1.3, 2.2, 0.4);
+  double largest = 0.0;
+  const double expected = sum_of_beam_densities(b, z, x, &largest);
+  EXPECT_NEAR(b.log_likelihood(z, x), expected, 8 * std::ldexp(1.0, -52) * 50 * largest);
+  // A copy of a shares its table.
+  const LikelihoodFieldModel copy = a;
+  EXPECT_EQ(copy.prepare(fan(50, 1.2)).cell_log_density, z.cell_log_density);
 }
 
 TEST(LikelihoodField, SkipsNoReturnAndShortReadingsAndSubsamplesLikeNav2) {
@@ -135,10 +225,10 @@ TEST(LikelihoodField, SkipsNoReturnAndShortReadingsAndSubsamplesLikeNav2) {
   LikelihoodFieldModel model(wall_field(), p);
   LaserScan s = fan(9, 1.0, 20.0);
   // Beams used: 0, 2, 4, 6, 8 (step (9 - 1) / (5 - 1) = 2).
-  s.ranges[2] = 20.0;                                      // at range_max: no return
+  s.ranges[2] = 20.0;                                     // at range_max: no return
   s.ranges[4] = std::numeric_limits<double>::infinity();  // no return
-  s.ranges[6] = 0.01;                                      // below range_min
-  s.ranges[1] = 0.01;                                      // not selected
+  s.ranges[6] = 0.01;                                     // below range_min
+  s.ranges[1] = 0.01;                                     // not selected
   const PreparedScan z = model.prepare(s);
   EXPECT_EQ(z.size(), 2u);
   EXPECT_EQ(z.skipped_no_return, 2u);
@@ -165,7 +255,8 @@ TEST(LikelihoodField, CubedSumIsNav2sAggregationAndNotDifferentiable) {
   s.range_max = 20.0;
   s.ranges = {0.5};
   const PreparedScan z = model.prepare(s);
-  const double pz = p.z_hit * std::exp(-0.5 * 1.5 * 1.5 / (p.sigma_hit * p.sigma_hit)) + p.z_rand / 20.0;
+  const double pz =
+      p.z_hit * std::exp(-0.5 * 1.5 * 1.5 / (p.sigma_hit * p.sigma_hit)) + p.z_rand / 20.0;
   EXPECT_NEAR(model.log_likelihood(z, Pose(1.05, 2.05, 0.0)), std::log(1.0 + pz * pz * pz), 1e-9);
   EXPECT_FALSE(model.differentiable());
   EXPECT_THAT(std::string(model.why_not_differentiable()), HasSubstr("not a likelihood"));
