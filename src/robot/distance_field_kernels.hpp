@@ -10,6 +10,8 @@
 
 #include <cstddef>
 
+#include <Eigen/Core>
+
 #include "implicit/robot/distance_field.hpp"
 
 namespace implicit::robot::detail {
@@ -99,26 +101,32 @@ struct FieldLookup {
       catmull_rom_derivatives(tx, dwx);
       catmull_rom_derivatives(ty, dwy);
     }
-    // Along y first: the four columns interpolated at ty (and their y derivatives), which the
-    // compiler does two columns per SSE2 instruction; then along x.
-    double col[4];
-    [[maybe_unused]] double dcol[4];
-    for (int i = 0; i < 4; ++i) {
-      col[i] = wy[0] * c[i];
-      if constexpr (Gradient) dcol[i] = dwy[0] * c[i];
+    // Along y first: the four columns interpolated at ty (and their y derivatives), as two
+    // pairs of columns (one SSE2 register each); then along x.
+    using Pair = Eigen::Array2d;
+    const auto pair = [](const float* p) { return Pair(p[0], p[1]); };
+    Pair lo = wy[0] * pair(c), hi = wy[0] * pair(c + 2);
+    [[maybe_unused]] Pair dlo, dhi;
+    if constexpr (Gradient) {
+      dlo = dwy[0] * pair(c);
+      dhi = dwy[0] * pair(c + 2);
     }
     for (int j = 1; j < 4; ++j) {
       c += stride;
-      for (int i = 0; i < 4; ++i) {
-        col[i] += wy[j] * c[i];
-        if constexpr (Gradient) dcol[i] += dwy[j] * c[i];
+      const Pair l = pair(c), h = pair(c + 2);
+      lo += wy[j] * l;
+      hi += wy[j] * h;
+      if constexpr (Gradient) {
+        dlo += dwy[j] * l;
+        dhi += dwy[j] * h;
       }
     }
+    const Pair wlo(wx[0], wx[1]), whi(wx[2], wx[3]);
     if constexpr (Gradient) {
-      *du = (dwx[0] * col[0] + dwx[1] * col[1]) + (dwx[2] * col[2] + dwx[3] * col[3]);
-      *dv = (wx[0] * dcol[0] + wx[1] * dcol[1]) + (wx[2] * dcol[2] + wx[3] * dcol[3]);
+      *du = (Pair(dwx[0], dwx[1]) * lo + Pair(dwx[2], dwx[3]) * hi).sum();
+      *dv = (wlo * dlo + whi * dhi).sum();
     }
-    return (wx[0] * col[0] + wx[1] * col[1]) + (wx[2] * col[2] + wx[3] * col[3]);
+    return (wlo * lo + whi * hi).sum();
   }
 };
 
