@@ -1,9 +1,11 @@
 // `implicit simulate`: a synthetic robot log (truth, surveyed landmarks, controls at irregular
-// times, detections with landmark ids) for any shipped robot, read back by `mcl` and `slam`.
+// times, detections with landmark ids) for any shipped robot, read back by `mcl` and `slam`; with
+// --map, a CARMEN laser log on an occupancy grid instead (cmd_simulate_laser.cpp).
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "cmd_simulate_laser.hpp"
 #include "context.hpp"
 #include "implicit/robot/simulate.hpp"
 #include "registry.hpp"
@@ -18,6 +20,9 @@ struct SimulateCommand {
   robot::SimulationOptions options;
   MotionNoise noise;
   double range_sd = 0.0, bearing_sd_deg = 0.0;  ///< 0: the spec's Sigma2
+  LaserSimulationCommand laser;
+  CLI::Option* map = nullptr;  ///< --map: the laser mode
+  CLI::Option* range_sd_option = nullptr;
 };
 
 template <typename Motion>
@@ -63,15 +68,31 @@ void setup_simulate(CLI::App& sub) {
                  "model's")
       ->expected(3)
       ->check(in_range(1e-9, 100.0));
-  sub.add_option("--range-sd", c.range_sd, "Sensor range noise sd [m] (0: spec Sigma2, 0.224 m)")
-      ->check(in_range(0.0, 100.0));
+  c.range_sd_option =
+      sub.add_option("--range-sd", c.range_sd,
+                     "Sensor range noise sd [m] (0: spec Sigma2, 0.224 m); with --map the "
+                     "laser's (default 0.02, 0: noiseless)")
+          ->check(in_range(0.0, 100.0));
   sub.add_option("--bearing-sd", c.bearing_sd_deg,
                  "Sensor bearing noise sd [deg] (0: spec Sigma2, 1.69 deg)")
       ->check(in_range(0.0, 90.0));
-  set_examples(sub, {"implicit simulate --model unicycle --seed 3 --out u.log.gz",
-                     "implicit mcl --model unicycle --data u.log.gz --method implicit -M 100"});
+  c.map = add_laser_simulation_options(sub, c.laser);
+  // The landmark robot's flags mean nothing to the laser log: refused, not ignored.
+  for (const char* name : {"--model", "--steps", "--landmarks", "--scan-every", "--control-sd",
+                           "--state-sd", "--bearing-sd"})
+    sub.get_option(name)->excludes(c.map);
+  set_examples(sub,
+               {"implicit simulate --model unicycle --seed 3 --out u.log.gz",
+                "implicit mcl --model unicycle --data u.log.gz --method implicit -M 100",
+                "implicit simulate --map lab.yaml --seed 3 --out lab_sim.log",
+                "implicit mcl --sensor laser --map lab.yaml --data lab_sim.log -M 100 --json"});
   sub.callback([cmd] {
     const SimulateCommand& c = *cmd;
+    if (c.map->count() > 0) {
+      run_laser_simulation(c.laser, c.range_sd_option->count() > 0 ? c.range_sd : kLaserRangeSd,
+                           c.ctx);
+      return;
+    }
     const robot::RobotLog none;  // no declaration: the parameters come from the flags alone
     robot::RobotLog log;
     if (c.model == "unicycle") {

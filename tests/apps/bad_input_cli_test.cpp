@@ -244,4 +244,110 @@ TEST(Cli, SigtermStopsWithAMessageAndLeavesNoPartialOutput) {
     if (entry.path().filename() != ".resume") ADD_FAILURE() << "left behind: " << entry.path();
 }
 
+// ---- map and simulate --map: every flag, the files they name -------------------------------
+
+// A 4 m x 4 m room of 0.1 m cells walled by its border, with a pillar at x, y in [1.8, 2.2);
+// `pixels` cuts the image short (a PGM that does not match its header and the YAML).
+void write_laser_map(const std::filesystem::path& yaml, const std::string& image, int pixels) {
+  std::string pgm = "P2\n40 40\n255\n";
+  for (int k = 0; k < pixels; ++k) {
+    const int ix = k % 40, iy = k / 40;
+    const bool wall =
+        ix == 0 || iy == 0 || ix == 39 || iy == 39 || (ix >= 18 && ix < 22 && iy >= 18 && iy < 22);
+    pgm += wall ? "0\n" : "254\n";
+  }
+  std::ofstream(yaml.parent_path() / image) << pgm;
+  std::ofstream(yaml) << "image: " << image << "\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\n"
+                      << "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+}
+
+struct BadInput {
+  std::string args;  ///< MAP, LOG, DIR are replaced by the fixture's paths
+  int code;
+  std::vector<std::string> says;  ///< each must appear in stderr
+};
+
+TEST(Cli, MapAndLaserSimulationRefuseBadInputNamingTheFlagOrFile) {
+  TempDir dir("laser_bad_input");
+  const std::string d = dir.path().string();
+  write_laser_map(dir.path() / "room.yaml", "room.pgm", 40 * 40);
+  write_laser_map(dir.path() / "short.yaml", "short.pgm", 40 * 40 - 7);
+  std::string carmen;
+  for (int k = 0; k < 3; ++k) {
+    carmen += "FLASER 4";
+    for (int i = 0; i < 4; ++i) carmen += " 1.5";
+    carmen += " 2 2 0 2 2 0 " + std::to_string(k) + " host " + std::to_string(k) + "\n";
+  }
+  std::ofstream(dir.path() / "room.log") << carmen;
+  std::ofstream(dir.path() / "robot.txt") << "landmark 1 5 3\ncontrol 0.1 2 0\n";
+  const std::string sim = "simulate --map MAP --out DIR/s.log";
+  const std::vector<BadInput> rows = {
+      {"map --out DIR/m.yaml", 2, {"--data is required"}},
+      {"map --data LOG", 2, {"--out is required"}},
+      {"map --data LOG --out DIR/m.txt", 2, {"--out: expected a YAML file name ending in .yaml"}},
+      {"map --data LOG --out /proc/self/m.yaml", 1, {"map --out", "/proc/self/m.pgm"}},
+      {"map --data DIR/none.log --out DIR/m.yaml", 1, {"map --data", "none.log"}},
+      {"map --data DIR/robot.txt --out DIR/m.yaml", 1, {"map --data", "robot.txt:1", "CARMEN"}},
+      {"map --data DIR/short.pgm --out DIR/m.yaml",
+       1,
+       {"map --data", "short.pgm", "at least one laser scan"}},
+      {"map --data LOG --out DIR/m.yaml --resolution nan", 2, {"--resolution", "finite"}},
+      {"map --data LOG --out DIR/m.yaml --resolution x", 2, {"--resolution", "got 'x'"}},
+      {"map --data LOG --out DIR/m.yaml --resolution -0.1", 2, {"--resolution", "got -0.1"}},
+      {"map --data LOG --out DIR/m.yaml --resolution 2", 2, {"--resolution", "[0.005, 1]"}},
+      {"map --data LOG --out DIR/m.yaml --max-range nan", 2, {"--max-range", "finite"}},
+      {"map --data LOG --out DIR/m.yaml --max-range -1", 2, {"--max-range", "got -1"}},
+      {"map --data LOG --out DIR/m.yaml --max-range 1e9", 2, {"--max-range", "[0, 1000]"}},
+      {"simulate --map DIR/none.yaml --out DIR/s.log", 1, {"simulate --map", "none.yaml"}},
+      {"simulate --map DIR/short.yaml --out DIR/s.log", 1, {"simulate --map", "short.pgm"}},
+      {"simulate --map MAP", 2, {"--out is required"}},
+      {"simulate --out DIR/s.log --waypoints '1,1;3,1'", 2, {"--waypoints requires --map"}},
+      {"simulate --out DIR/s.log --beams 180", 2, {"--beams requires --map"}},
+      {sim + " --steps 10", 2, {"--steps excludes --map"}},
+      {sim + " --model ute", 2, {"--model excludes --map"}},
+      {sim + " --waypoints 1,1", 2, {"--waypoints", "at least 2 points"}},
+      {sim + " --waypoints 'a,b;1,1'", 2, {"--waypoints", "got 'a,b' as point 1"}},
+      {sim + " --waypoints '1,1;nan,2'", 2, {"--waypoints", "got 'nan,2' as point 2"}},
+      {sim + " --waypoints '1;2'", 2, {"--waypoints", "got '1' as point 1"}},
+      {sim + " --waypoints '0.05,0.05;1,1'", 1, {"--waypoints", "point 1", "room.yaml"}},
+      {sim + " --waypoints '1,2;3,2'", 1, {"--waypoints", "segment from point 1", "blocked"}},
+      {sim + " --waypoints '1,2;1,1;3,1;3,2' --laps 2", 1, {"--waypoints", "way back", "--laps"}},
+      {sim + " --waypoints '1,1;1,1'", 1, {"--waypoints", "span a path"}},
+      {sim + " --clearance 3", 1, {"--clearance", "room.yaml"}},
+      {sim + " --scan-period 0.001 --laps 1000 --beams 10000", 1, {"readings", "--scan-period"}},
+      {"simulate --map MAP --out /proc/self/s.log", 1, {"/proc/self/s.log: expected a writable"}},
+      {"simulate --map MAP --out /proc/self/s.log.gz", 1, {"/proc/self/s.log.gz: expected a"}},
+  };
+  // Numeric flags: not a number, NaN, below and above the accepted range.
+  const std::vector<std::pair<std::string, std::vector<std::string>>> numeric = {
+      {"--speed", {"x", "nan", "0", "11"}},        {"--turn-rate", {"x", "inf", "0", "721"}},
+      {"--scan-period", {"x", "nan", "-1", "61"}}, {"--clearance", {"x", "nan", "-0.1", "11"}},
+      {"--laps", {"x", "1.5", "0", "1001"}},       {"--beams", {"x", "3.5", "1", "10001"}},
+      {"--fov-deg", {"x", "nan", "0", "181"}},     {"--range-max", {"x", "nan", "0", "60"}},
+      {"--range-sd", {"x", "nan", "-1", "101"}},
+  };
+  std::vector<BadInput> all = rows;
+  for (const auto& [flag, values] : numeric)
+    for (const auto& v : values) all.push_back({sim + " " + flag + " " + v, 2, {flag, "expected"}});
+  for (BadInput row : all) {
+    for (const auto& [key, value] : {std::pair<std::string, std::string>{"MAP", d + "/room.yaml"},
+                                     {"LOG", d + "/room.log"},
+                                     {"DIR", d}}) {
+      for (std::size_t at = row.args.find(key); at != std::string::npos;
+           at = row.args.find(key, at + value.size()))
+        row.args.replace(at, key.size(), value);
+    }
+    const auto r = run_cli(row.args);
+    EXPECT_EQ(r.code, row.code) << row.args << "\n" << r.err;
+    for (const auto& s : row.says)
+      EXPECT_NE(r.err.find(s), std::string::npos) << row.args << "\n" << r.err;
+  }
+  // Nothing was written by a refused command (the map and log fixtures aside).
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name.rfind("room.", 0) == 0 || name.rfind("short.", 0) == 0 || name == "robot.txt")
+        << "left behind: " << name;
+  }
+}
+
 }  // namespace
