@@ -10,7 +10,8 @@ Core (spec §1):
 
 Robotics (spec §3): implicit.models (Ute, Unicycle, RangeBearing), implicit.data (carpark(),
 victoria_park(), read_log(), simulate(), steps()), ParticleFilter, implicit.slam (Filter, run),
-implicit.mcl.run. Control (spec §2): implicit.control.
+implicit.mcl.run; implicit.laser (occupancy grids, CARMEN logs, the likelihood field, the
+odometry model, a laser ParticleFilter and run). Control (spec §2): implicit.control.
 
 Errors are raised as implicit.InvalidArgument (a ValueError) with the library's message.
 
@@ -27,7 +28,7 @@ _paths.configure()
 from ._core import SampleResult, ess, log_sum_exp, resample, sample  # noqa: E402
 from ._implicit import InvalidArgument, ParseError, __version__  # noqa: E402
 from ._implicit import ParticleFilter  # noqa: E402
-from . import control, data, mcl, models, slam  # noqa: E402
+from . import control, data, laser, mcl, models, slam  # noqa: E402
 
 __all__ = [
     "InvalidArgument",
@@ -38,6 +39,7 @@ __all__ = [
     "control",
     "data",
     "ess",
+    "laser",
     "log_sum_exp",
     "mcl",
     "models",

@@ -14,6 +14,7 @@ void init_filter(py::module_& m);
 void init_slam(py::module_& m);
 void init_runs(py::module_& m);
 void init_control(py::module_& m);
+void init_laser(py::module_& m);
 }  // namespace implicit::python
 
 PYBIND11_MODULE(_implicit, m) {
@@ -33,5 +34,7 @@ PYBIND11_MODULE(_implicit, m) {
   ip::init_runs(m);
   auto control = m.def_submodule("control", "Path integral control problems.");
   ip::init_control(control);
+  auto laser = m.def_submodule("laser", "Laser localization on occupancy grids.");
+  ip::init_laser(laser);
   m.attr("__version__") = implicit::version();
 }

@@ -1,0 +1,78 @@
+#pragma once
+// Shared by the laser bindings (laser.cpp: grids, maps, logs, the likelihood field and the
+// odometry model; laser_filter.cpp: the steppable filter and the one-call run). Python hands
+// over loosely typed objects: every argument is converted here, and a bad one raises
+// InvalidArgument naming it, before any C++ object sees it.
+
+#include <filesystem>
+#include <initializer_list>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "common.hpp"
+#include "implicit/robot/laser_scan.hpp"
+#include "implicit/robot/likelihood_field.hpp"
+#include "implicit/robot/occupancy_grid.hpp"
+#include "implicit/robot/odometry_model.hpp"
+
+namespace implicit::python::laser {
+
+// The files of the laser bindings may be compiled as one unit (IMPLICIT_UNITY_BUILD): what they
+// share is declared here once, and each keeps its own helpers in an unnamed namespace under
+// implicit::python::laser, apart from the other bindings' helpers in implicit::python.
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+inline constexpr long long kMaxInt = std::numeric_limits<long long>::max();
+
+/// The name of a Python object's type, for messages ("got str").
+std::string type_name(const py::handle& o);
+
+/// A Python number as a double in [lo, hi] (lo excluded when lo_open); NaN and infinities are
+/// refused. The message names `name` and the bounds.
+double number_arg(const py::handle& o, const std::string& name, double lo, double hi,
+                  bool lo_open = false);
+/// A Python integer (not a float) in [lo, hi].
+long long int_arg(const py::handle& o, const std::string& name, long long lo, long long hi);
+/// A str that is one of `allowed`.
+std::string choice_arg(const py::handle& o, const std::string& name,
+                       std::initializer_list<const char*> allowed);
+/// A str or os.PathLike naming a file.
+std::filesystem::path path_arg(const py::handle& o, const std::string& name);
+/// An (n,) array of finite values.
+Vec<3> vec3_arg(const py::handle& o, const std::string& name);
+/// (x forward [m], y left [m], yaw [rad]) of the laser on the robot.
+robot::LaserMount mount_arg(const py::handle& o, const std::string& name);
+/// The grid bound as implicit.laser.OccupancyGrid.
+const robot::OccupancyGrid& grid_arg(const py::handle& o, const std::string& name);
+/// Odometry alphas from a (4,) array of finite values >= 0.
+robot::OdometryAlphas alphas_arg(const py::handle& o, const std::string& name);
+
+/// One scan from its fields; `prefix` goes in front of each field's name in messages (e.g.
+/// "scans[3]."), so that every bad field is named.
+robot::LaserScan scan_arg(const py::handle& ranges, const py::handle& angle_min,
+                          const py::handle& angle_increment, const py::handle& range_min,
+                          const py::handle& range_max, const std::string& prefix = "");
+
+/// Scans from the dict read_carmen returns (per-scan arrays) or from a list of scan dicts
+/// (ranges, angle_min, angle_increment, range_max, optional range_min).
+std::vector<robot::LaserScan> scans_arg(const py::handle& o, const std::string& name);
+
+/// The likelihood field's settings as Python passes them (keywords of LikelihoodField).
+struct LaserSpec {
+  robot::LikelihoodFieldParams params;
+  robot::LaserMount mount;
+};
+/// Reads the LikelihoodField keywords from `kw` (missing ones keep their defaults); a key that
+/// is not one of them is refused, naming `where` (e.g. "laser").
+LaserSpec laser_spec(const py::dict& kw, const std::string& where);
+/// The keywords of LikelihoodField, for messages.
+extern const char* const kLaserKeywords;
+
+/// The Interpolation named by text (the name of the argument in messages: "interpolation").
+robot::Interpolation interpolation_arg(const py::handle& o, const std::string& name);
+robot::BeamAggregation aggregation_arg(const py::handle& o, const std::string& name);
+
+/// implicit.laser.ParticleFilter and implicit.laser.run (laser_filter.cpp).
+void init_laser_filter(py::module_& m);
+
+}  // namespace implicit::python::laser

@@ -1,0 +1,322 @@
+// implicit.laser.ParticleFilter (laser Monte Carlo localization stepped from Python) and
+// implicit.laser._run, the experiment of `implicit mcl --sensor laser` (experiments/laser_mcl.hpp)
+// called with the same settings struct, so that its numbers are the tool's.
+
+#include <Python.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <span>
+
+#include <Eigen/Cholesky>
+#include <nlohmann/json.hpp>
+
+#include "experiments/laser_mcl.hpp"
+#include "implicit/core/parallel.hpp"
+#include "implicit/filter/monte_carlo_localization.hpp"
+#include "implicit/robot/distance_field.hpp"
+#include "laser.hpp"
+
+namespace implicit::python::laser {
+namespace {
+
+using robot::Mat3;
+using robot::Pose;
+
+/// The implicit proposal needs the model's gradient; say which argument takes it away.
+void require_differentiable(bool implicit, const robot::LikelihoodFieldParams& p) {
+  if (!implicit) return;
+  require(p.interpolation != robot::Interpolation::kNearest,
+          "interpolation: the implicit proposal needs the field's gradient, which 'nearest' does "
+          "not have (use 'bilinear' or 'bicubic', or the bootstrap proposal)");
+  require(p.aggregation == robot::BeamAggregation::kProduct,
+          "aggregation: the implicit proposal needs a likelihood, which 'cubed-sum' is not (use "
+          "'product', or the bootstrap proposal)");
+}
+
+/// The filter behind the Python class, whatever its proposal.
+class AnyLaserFilter {
+ public:
+  virtual ~AnyLaserFilter() = default;
+  virtual void initialize(const Pose& mean, const Mat3& cov) = 0;
+  virtual void step(const Vec<3>& u) = 0;
+  virtual void step(const Vec<3>& u, const robot::LaserScan& z) = 0;
+  virtual std::span<const Pose> particles() const = 0;
+  virtual std::span<const double> weights() const = 0;
+  virtual const filter::StepSummary& last() const = 0;
+};
+
+template <typename Proposal>
+class LaserFilterOf final : public AnyLaserFilter {
+ public:
+  LaserFilterOf(robot::OdometryModel motion, robot::LikelihoodFieldModel model, Proposal proposal,
+                filter::FilterOptions o)
+      : pf_(std::move(motion), std::move(model), std::move(proposal), o) {}
+  void initialize(const Pose& mean, const Mat3& cov) override { pf_.initialize(mean, cov); }
+  void step(const Vec<3>& u) override { pf_.step(u); }
+  void step(const Vec<3>& u, const robot::LaserScan& z) override { pf_.step(u, z, "scan"); }
+  std::span<const Pose> particles() const override { return pf_.particles(); }
+  std::span<const double> weights() const override { return pf_.weights(); }
+  const filter::StepSummary& last() const override { return pf_.last(); }
+
+ private:
+  filter::MonteCarloLocalization<robot::OdometryModel, robot::LikelihoodFieldModel, Proposal> pf_;
+};
+
+struct PyLaserFilter {
+  std::unique_ptr<AnyLaserFilter> f;
+  bool initialized = false;
+};
+
+PyLaserFilter make_filter(const py::object& grid, const py::object& proposal,
+                          const py::object& particles, const py::object& seed,
+                          const py::object& alphas, const py::object& laser,
+                          const py::object& resample_threshold, const py::object& starts,
+                          const py::kwargs& kw) {
+  const robot::OccupancyGrid& g = grid_arg(grid, "grid");
+  const bool implicit = choice_arg(proposal, "proposal", {"implicit", "bootstrap"}) == "implicit";
+  filter::FilterOptions o;
+  o.particles = static_cast<std::size_t>(int_arg(particles, "particles", 1, 10'000'000));
+  o.seed = static_cast<std::uint64_t>(int_arg(seed, "seed", 0, kMaxInt));
+  o.resample_threshold = number_arg(resample_threshold, "resample_threshold", 0.0, 1.0);
+  const robot::OdometryModel motion(alphas_arg(alphas, "alphas"));
+  // The field's keywords come in the dict `laser`, as keywords of the call, or both.
+  py::dict merged;
+  if (!laser.is_none()) {
+    require(py::isinstance<py::dict>(laser),
+            "laser: expected a dict of LikelihoodField keywords ({}) or None, got {}",
+            kLaserKeywords, type_name(laser));
+    merged = py::dict(laser);
+  }
+  for (const auto& item : kw) {
+    require(!merged.contains(item.first), "laser: '{}' is given both in laser and as a keyword",
+            std::string(py::str(item.first)));
+    merged[item.first] = item.second;
+  }
+  const LaserSpec spec = laser_spec(merged, "ParticleFilter");
+  require_differentiable(implicit, spec.params);
+  auto field =
+      std::make_shared<const robot::DistanceField>(g, spec.params.laser_likelihood_max_dist);
+  robot::LikelihoodFieldModel model(field, spec.params, spec.mount);
+  filter::ImplicitProposal newton;
+  newton.starts = static_cast<int>(int_arg(starts, "starts", 1, 64));
+  PyLaserFilter p;
+  if (implicit)
+    p.f = std::make_unique<LaserFilterOf<filter::ImplicitProposal>>(motion, model, newton, o);
+  else
+    p.f = std::make_unique<LaserFilterOf<filter::BootstrapProposal>>(
+        motion, model, filter::BootstrapProposal{}, o);
+  return p;
+}
+
+py::dict summary(const filter::StepSummary& s) {
+  py::dict d;
+  d["step"] = s.step;
+  d["mean"] = py::array_t<double>(3, s.mean.data());
+  d["covariance"] = py::array_t<double>({3, 3}, s.covariance.data());  // symmetric
+  d["ess"] = s.ess;
+  d["resampled"] = s.resampled;
+  d["updated"] = s.updated;
+  d["log_likelihood_increment"] = s.log_likelihood_increment;
+  d["particles"] = s.particles;
+  d["beams"] = s.detections_used;
+  d["newton_evaluations"] = s.newton_evaluations;
+  d["fallbacks"] = s.fallbacks;
+  d["failures"] = s.failures;
+  return d;
+}
+
+Mat3 covariance_arg(const py::handle& o, const std::string& name) {
+  const Array c = require_shape(o, name, {3, 3});
+  Mat3 m;
+  double largest = 0.0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      m(i, j) = c.at(i, j);
+      largest = std::max(largest, std::abs(m(i, j)));
+    }
+  // Symmetric up to the rounding of a covariance computed in floating point.
+  require((m - m.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * largest,
+          "{}: expected a symmetric matrix, got one with entries (0, 1) = {} and (1, 0) = {}", name,
+          m(0, 1), m(1, 0));
+  require(Eigen::LLT<Mat3>(m).info() == Eigen::Success,
+          "{}: expected a positive definite matrix, got diagonal ({}, {}, {})", name, m(0, 0),
+          m(1, 1), m(2, 2));
+  return m;
+}
+
+constexpr const char* kFilterDoc = R"doc(
+Monte Carlo localization with a laser on an occupancy grid, stepped from Python: the odometry
+motion model and the likelihood field, with the implicit or the bootstrap proposal.
+
+ParticleFilter(grid, proposal="implicit", particles=100, seed=0, alphas=(0.2, 0.2, 0.2, 0.2),
+               laser=None, resample_threshold=0.5, starts=2, **laser_keywords)
+
+Args:
+    grid: implicit.laser.OccupancyGrid, the map.
+    proposal: "implicit" (implicit sampling per particle) or "bootstrap" (the motion model).
+    particles: M.
+    seed: particle j at step n draws from the stream (seed, n, j): the same for any thread count.
+    alphas: alpha1..alpha4 of the odometry model.
+    laser: a dict of LikelihoodField keywords (z_hit, z_rand, sigma_hit, max_dist, max_beams,
+        interpolation, aggregation, mount); they may also be given as keywords of the call.
+    resample_threshold: resample when ESS < threshold * M.
+    starts: the implicit proposal's Newton starts per particle: the prediction and starts - 1
+        draws from the motion prior; the lowest minimum centres the proposal (weights stay
+        exact). Not used by the bootstrap proposal.
+
+initialize(mean (3,), covariance (3, 3)) draws the particles; step(u, ranges=None, angle_min=None,
+angle_increment=None, range_min=0.0, range_max=None) moves them by the odometry increment u (3,)
+(dx, dy, dtheta in the previous odometry frame) and, when ranges is given, weights them by the
+scan seen after the move. step returns a dict: step, mean (3,), covariance (3, 3), ess, resampled,
+updated, log_likelihood_increment, particles (the count M), beams used, newton_evaluations (mean
+per particle), fallbacks, failures. particles (M, 3) and weights (M,) are copies; last is the
+dict of the last step.
+
+Example::
+
+    pf = implicit.laser.ParticleFilter(grid, particles=200, seed=1, sigma_hit=0.1)
+    pf.initialize([1.0, 1.0, 0.0], np.diag([0.01, 0.01, 0.003]))
+    r = pf.step([0.2, 0.0, 0.0], **implicit.laser.simulate_scan(grid, [1.2, 1.0, 0.0])))doc";
+
+void bind_filter(py::module_& m) {
+  py::class_<PyLaserFilter>(m, "ParticleFilter", kFilterDoc)
+      .def(py::init(&make_filter), py::arg("grid"), py::arg("proposal") = "implicit",
+           py::arg("particles") = 100, py::arg("seed") = 0,
+           py::arg("alphas") = py::make_tuple(0.2, 0.2, 0.2, 0.2), py::arg("laser") = py::none(),
+           py::arg("resample_threshold") = 0.5, py::arg("starts") = 2)
+      .def(
+          "initialize",
+          [](PyLaserFilter& p, const py::object& mean, const py::object& covariance) {
+            const Pose x = vec3_arg(mean, "mean");
+            const Mat3 c = covariance_arg(covariance, "covariance");
+            p.f->initialize(x, c);
+            p.initialized = true;
+          },
+          py::arg("mean"), py::arg("covariance"),
+          "Draws the particles from N(mean (3,), covariance (3, 3)) with equal weights.")
+      .def(
+          "step",
+          [](PyLaserFilter& p, const py::object& u, const py::object& ranges,
+             const py::object& angle_min, const py::object& angle_increment,
+             const py::object& range_min, const py::object& range_max) {
+            require(p.initialized, "step: call initialize(mean, covariance) first");
+            const Vec<3> du = vec3_arg(u, "u");
+            if (ranges.is_none()) {
+              require(angle_min.is_none() && angle_increment.is_none() && range_max.is_none(),
+                      "ranges: expected the scan's ranges with angle_min, angle_increment and "
+                      "range_max, got None");
+              py::gil_scoped_release unlocked;
+              p.f->step(du);
+            } else {
+              const robot::LaserScan z =
+                  scan_arg(ranges, angle_min, angle_increment, range_min, range_max);
+              py::gil_scoped_release unlocked;
+              p.f->step(du, z);
+            }
+            return summary(p.f->last());
+          },
+          py::arg("u"), py::arg("ranges") = py::none(), py::arg("angle_min") = py::none(),
+          py::arg("angle_increment") = py::none(), py::arg("range_min") = 0.0,
+          py::arg("range_max") = py::none(),
+          "Moves the particles by the odometry increment u (3,), then weights them by the scan "
+          "(ranges [m], +inf no return, at bearings angle_min + i angle_increment [rad]) when "
+          "ranges is given. Returns the step's summary dict.")
+      .def_property_readonly(
+          "particles",
+          [](const PyLaserFilter& p) {
+            const std::span<const Pose> s = p.f->particles();
+            py::array_t<double> a({static_cast<py::ssize_t>(s.size()), py::ssize_t{3}});
+            for (std::size_t j = 0; j < s.size(); ++j)
+              for (int i = 0; i < 3; ++i) a.mutable_at(j, i) = s[j](i);
+            return a;
+          },
+          "The particles (M, 3), a copy.")
+      .def_property_readonly(
+          "weights",
+          [](const PyLaserFilter& p) {
+            const std::span<const double> w = p.f->weights();
+            return py::array_t<double>(static_cast<py::ssize_t>(w.size()), w.data());
+          },
+          "The normalised weights (M,), a copy.")
+      .def_property_readonly(
+          "last", [](const PyLaserFilter& p) { return summary(p.f->last()); },
+          "The summary dict of the last step (of initialize before any step).");
+}
+
+std::string run(const py::dict& kw, const py::object& progress) {
+  const auto arg = [&](const char* key) -> py::object {
+    require(kw.contains(key), "run: missing setting '{}'", key);
+    return kw[key];
+  };
+  experiments::LaserMclSettings s;
+  s.data.data = path_arg(arg("data"), "data");
+  if (!arg("map").is_none()) s.data.map = path_arg(arg("map"), "map");
+  s.data.map_resolution = number_arg(arg("map_resolution"), "map_resolution", 0.005, 1.0);
+  s.data.update_min_d = number_arg(arg("update_min_d"), "update_min_d", 0.0, kInf);
+  s.data.update_min_a = number_arg(arg("update_min_a"), "update_min_a", 0.0, kInf);
+  s.data.max_updates =
+      static_cast<std::size_t>(int_arg(arg("max_updates"), "max_updates", 0, kMaxInt));
+  const bool implicit =
+      choice_arg(arg("proposal"), "proposal", {"implicit", "bootstrap"}) == "implicit";
+  s.proposal =
+      implicit ? experiments::ProposalKind::kImplicit : experiments::ProposalKind::kBootstrap;
+  s.implicit_map = choice_arg(arg("implicit_map"), "implicit_map", {"linear", "random"}) == "linear"
+                       ? filter::ImplicitMap::kLinear
+                       : filter::ImplicitMap::kRandom;
+  s.implicit_starts = static_cast<int>(int_arg(arg("starts"), "starts", 1, 64));
+  s.particles = static_cast<std::size_t>(int_arg(arg("particles"), "particles", 1, 10'000'000));
+  s.runs = static_cast<int>(int_arg(arg("runs"), "runs", 1, 100000));
+  s.seed = static_cast<std::uint64_t>(int_arg(arg("seed"), "seed", 0, kMaxInt));
+  // None keeps the experiment's defaults, so that a run without them is the tool's without them.
+  if (!arg("alphas").is_none()) s.odometry_noise = alphas_arg(arg("alphas"), "alphas");
+  s.filter_alphas = arg("filter_alphas").is_none()
+                        ? s.odometry_noise
+                        : alphas_arg(arg("filter_alphas"), "filter_alphas");
+  py::dict field;
+  for (const char* key :
+       {"z_hit", "z_rand", "sigma_hit", "max_dist", "max_beams", "interpolation", "aggregation"})
+    field[key] = arg(key);
+  s.laser = laser_spec(field, "run").params;
+  if (!arg("laser_max_range").is_none())
+    s.laser.laser_max_range =
+        number_arg(arg("laser_max_range"), "laser_max_range", 0.0, kInf, true);
+  require_differentiable(implicit, s.laser);
+  s.start = choice_arg(arg("start"), "start", {"known", "global"}) == "known"
+                ? experiments::StartKind::kKnown
+                : experiments::StartKind::kGlobal;
+  s.global_updates = static_cast<int>(int_arg(arg("global_updates"), "global_updates", 1, 100000));
+  s.global_success_radius = number_arg(arg("global_radius"), "global_radius", 0.0, kInf, true);
+  const py::object tracks = arg("tracks");
+  require(py::isinstance<py::bool_>(tracks), "tracks: expected True or False, got {}",
+          type_name(tracks));
+  s.keep_tracks = tracks.cast<bool>();
+  const int threads = static_cast<int>(int_arg(arg("threads"), "threads", 0, 100000));
+  require(progress.is_none() || PyCallable_Check(progress.ptr()),
+          "progress: expected a callable progress(done, total) or None, got {}",
+          type_name(progress));
+  // Called between runs, with the interpreter's lock: the user's callback, and Ctrl-C.
+  const experiments::Progress report = [&](int done, int total) {
+    py::gil_scoped_acquire locked;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    if (!progress.is_none()) progress(done, total);
+  };
+  nlohmann::json j;
+  {
+    py::gil_scoped_release unlocked;
+    ThreadLimit limit(threads);
+    j = experiments::to_json(experiments::run_laser_mcl(s, report), s.keep_tracks);
+  }
+  return j.dump();
+}
+
+}  // namespace
+
+void init_laser_filter(py::module_& m) {
+  bind_filter(m);
+  m.def("_run", &run, py::arg("settings"), py::arg("progress") = py::none(),
+        "The experiment of `implicit mcl --sensor laser --json` (use implicit.laser.run).");
+}
+
+}  // namespace implicit::python::laser
