@@ -129,7 +129,9 @@ void BM_AssociationVsLandmarks(benchmark::State& state) {
   LandmarkMap map;
   LandmarkGridIndex index;
   for (std::size_t k = 0; k < n; ++k) {
-    const Vec<2> m(side * rng.uniform(), side * rng.uniform());
+    // One draw per declarator: the order of function arguments is unspecified.
+    const double mx = side * rng.uniform(), my = side * rng.uniform();
+    const Vec<2> m(mx, my);
     map.push_back({m, 0.05 * Mat<2>::Identity()});
     index.insert(static_cast<std::uint32_t>(k), m, 0.1);
   }
@@ -144,7 +146,7 @@ void BM_AssociationVsLandmarks(benchmark::State& state) {
         map.get(static_cast<std::size_t>(rng.uniform() * static_cast<double>(n)) % n).mean;
     const double a = 2.0 * kPi * rng.uniform();
     poses[q] = Pose(m(0) - 8.0 * std::cos(a), m(1) - 8.0 * std::sin(a), a);
-    zs[q] = sensor.predict(poses[q], m) + Vec<2>(0.2 * rng.normal(), 0.03 * rng.normal());
+    zs[q] = sensor.predict(poses[q], m) + Vec<2>(0.2, 0.03).cwiseProduct(rng.normal_vector<2>());
   }
   const Mat<3> sigma1 = model.process_covariance(poses[0], Control(3.0, 0.05));
   std::vector<std::uint32_t> scratch;

@@ -77,14 +77,15 @@ int main() {
     const Control c(2.0, 0.2);
     Rng rng({7, static_cast<std::uint64_t>(n), 0, purpose::kData});
     const Mat3 l1 = model.process_covariance(x, c).llt().matrixL();
-    x = model.predict(x, c) + l1 * Vec<3>(rng.normal(), rng.normal(), rng.normal());
+    // One call for the three draws: the order of function arguments is unspecified, so
+    // Vec<3>(rng.normal(), rng.normal(), rng.normal()) differs between compilers.
+    x = model.predict(x, c) + l1 * rng.normal_vector<3>();
     std::vector<filter::LabelledMeasurement> obs;
     if (n % 5 == 0)
       for (std::size_t k = 0; k < map.size(); ++k) {
         const robot::Measurement h = sensor.predict(x, map.position(k));
         const double b = wrap_angle(h(1));
-        if (h(0) < 15.0 && b > 0.0 && b < kPi)
-          obs.push_back({h + l2 * Vec<2>(rng.normal(), rng.normal()), -1});
+        if (h(0) < 15.0 && b > 0.0 && b < kPi) obs.push_back({h + l2 * rng.normal_vector<2>(), -1});
       }
     u.push_back(c);
     truth.push_back(x);

@@ -18,7 +18,9 @@ namespace implicit::robot {
 namespace {
 
 Pose random_pose(Rng& rng) {
-  return Pose(10 * rng.uniform() - 5, 10 * rng.uniform() - 5, 8 * rng.uniform() - 4);
+  // One draw per declarator: the order of function arguments is unspecified.
+  const double x = 10 * rng.uniform() - 5, y = 10 * rng.uniform() - 5;
+  return Pose(x, y, 8 * rng.uniform() - 4);
 }
 
 TEST(Unicycle, JacobianMatchesAutomaticDifferentiation) {
@@ -26,7 +28,8 @@ TEST(Unicycle, JacobianMatchesAutomaticDifferentiation) {
   Rng rng({11, 0, 0, purpose::kUser});
   for (int trial = 0; trial < 20; ++trial) {
     const Pose x = random_pose(rng);
-    const Control u(4 * rng.uniform() - 2, 2 * rng.uniform() - 1);
+    const double speed = 4 * rng.uniform() - 2;
+    const Control u(speed, 2 * rng.uniform() - 1);
     const Mat3 j = model.jacobian_state(x, u);
     for (int row = 0; row < 3; ++row) {
       auto component = [&](const auto& xj) {
@@ -64,7 +67,8 @@ TEST(MountedSensor, JacobianMatchesAutomaticDifferentiation) {
     const SensorMounting mount{2 * rng.uniform() - 1, 2 * rng.uniform() - 1, 4 * rng.uniform() - 2};
     const MountedRangeBearingSensor s(mount);
     const Pose x = random_pose(rng);
-    const Landmark m(x(0) + 3 + 5 * rng.uniform(), x(1) - 4 + 8 * rng.uniform());
+    const double mx = x(0) + 3 + 5 * rng.uniform();
+    const Landmark m(mx, x(1) - 4 + 8 * rng.uniform());
     Measurement h;
     Mat23 j;
     s.predict_with_jacobian(x, m, h, j);
@@ -104,7 +108,8 @@ TEST(MountedSensor, AtTheStateWithTheSickConventionItIsTheUtesLaser) {
   Rng rng({13, 0, 0, purpose::kUser});
   for (int trial = 0; trial < 20; ++trial) {
     const Pose x = random_pose(rng);
-    const Landmark m(10 * rng.uniform() - 5, 10 * rng.uniform() - 5);
+    const double mx = 10 * rng.uniform() - 5;
+    const Landmark m(mx, 10 * rng.uniform() - 5);
     const Measurement a = mounted.predict(x, m), b = laser.predict(x, m);
     EXPECT_NEAR(a(0), b(0), 1e-12);
     EXPECT_NEAR(wrap_angle(a(1) - b(1)), 0.0, 1e-12);

@@ -43,15 +43,21 @@ Case make_case(std::uint64_t k) {
   Rng rng({11, k, 0, purpose::kData});
   Case c;
   const double cell = c.index.cell_size();
-  c.f = Pose(40.0 * (rng.uniform() - 0.5), 40.0 * (rng.uniform() - 0.5), 6.0 * rng.uniform());
+  // One draw per declarator or statement: the order of function arguments is unspecified, and
+  // the cases must be the same for every compiler.
+  const double fx = 40.0 * (rng.uniform() - 0.5), fy = 40.0 * (rng.uniform() - 0.5);
+  c.f = Pose(fx, fy, 6.0 * rng.uniform());
   const robot::UteModel model{robot::UteParams{}};
-  const Control u(0.5 + 3.0 * rng.uniform(), 0.4 * (rng.uniform() - 0.5));
+  const double speed = 0.5 + 3.0 * rng.uniform();
+  const Control u(speed, 0.4 * (rng.uniform() - 0.5));
   // Scale Sigma1 up to 100x so that the disc bound is exercised with large pose uncertainty.
-  c.sigma1 = model.process_covariance(c.f, u) * (1.0 + 99.0 * rng.uniform() * rng.uniform());
+  const double scale = 99.0 * rng.uniform();
+  c.sigma1 = model.process_covariance(c.f, u) * (1.0 + scale * rng.uniform());
   const double max_trace = k % 3 == 0 ? 0.0 : (k % 3 == 1 ? 0.3 : 5.0);
   const int n = 30 + static_cast<int>(rng.uniform() * 300);
   for (int i = 0; i < n; ++i) {
-    Vec<2> m = c.f.head<2>() + Vec<2>(50.0 * (rng.uniform() - 0.5), 50.0 * (rng.uniform() - 0.5));
+    const double dx = 50.0 * (rng.uniform() - 0.5), dy = 50.0 * (rng.uniform() - 0.5);
+    Vec<2> m = c.f.head<2>() + Vec<2>(dx, dy);
     const double v = rng.uniform();
     if (v < 0.3) m(0) = cell * std::round(m(0) / cell);  // on a vertical border
     if (v > 0.2 && v < 0.5) m(1) = cell * std::round(m(1) / cell);
@@ -64,10 +70,11 @@ Case make_case(std::uint64_t k) {
   const RangeBearingSensor s;
   if (rng.uniform() < 0.8) {
     const auto target = static_cast<std::size_t>(rng.uniform() * static_cast<double>(n));
-    const Vec<2> noise(0.3 * rng.normal(), 0.05 * rng.normal());
+    const Vec<2> noise = Vec<2>(0.3, 0.05).cwiseProduct(rng.normal_vector<2>());
     c.z = s.predict(c.f, c.map.get(std::min(target, c.map.size() - 1)).mean) + noise;
   } else {
-    c.z = Measurement(1.0 + 14.0 * rng.uniform(), kPi * rng.uniform());
+    const double range = 1.0 + 14.0 * rng.uniform();
+    c.z = Measurement(range, kPi * rng.uniform());
   }
   c.z(0) = std::max(c.z(0), 0.05);
   return c;
