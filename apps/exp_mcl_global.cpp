@@ -1,4 +1,4 @@
-// Global localization and kidnapping on a robot log (spec §3.10): `implicit mcl --init global`
+// Global localization and kidnapping on a robot log (spec §3.11): `implicit mcl --init global`
 // and `implicit mcl --kidnap-at T --kidnap-skip D`, with recovery and KLD-sampling.
 #include <algorithm>
 #include <cmath>

@@ -68,7 +68,7 @@ struct MclSettings {
   std::vector<double> state_sd;     ///< motion noise sd of x, y, heading; empty: default
   double range_sd = 0.0;            ///< sensor range sd [m]; 0: Table 7 per --sigma2
   double bearing_sd_deg = 0.0;      ///< sensor bearing sd [deg]; 0: Table 7 per --sigma2
-  // Global localization, kidnapping, recovery and KLD-sampling (spec §3.10).
+  // Global localization, kidnapping, recovery and KLD-sampling (spec §3.11).
   std::string init = "known";     ///< "known" (the log's initial pose) or "global"
   double start_span = 60.0;       ///< [s] global starts: run r starts r * span / runs in
   double duration = 0.0;          ///< [s] runs end at the first control + duration; 0: log's end

@@ -47,7 +47,7 @@ json to_json(const SlamSettings& s) {
 /// its M values over 20 seeds; Table 6: 50 data sets at M = 100) within about 5 minutes on
 /// 2 cores; --quick keeps every table and figure but with few runs, for about 15 seconds.
 
-/// Beyond the paper: global localization (no initial pose) and kidnapping (spec §3.10), implicit
+/// Beyond the paper: global localization (no initial pose) and kidnapping (spec §3.11), implicit
 /// against standard MCL at particle counts of similar cost. The figure's data are the error
 /// traces of the largest M of each method.
 void add_global_localization(Plan& plan, bool quick) {

@@ -150,6 +150,10 @@ ERRATUM = re.compile(r"^\s*[-*]?\s*\*\*(E\d+)\*\*")
 CITATION = re.compile(r"\bspec(?:ification)?(?:\.md)?\s*§\s*(\d+(?:\.\d+)*)((?:\s*(?:,|–|-|and)\s*§?\s*\d+(?:\.\d+)*)*)")
 ERRATUM_CITED = re.compile(r"(?<![\w.])E(\d+)(?:\s*[–-]\s*E?(\d+))?\b")
 NOT_AN_ERRATUM = re.compile(r"noqa[:\s]+[A-Z0-9, ]*$")
+# Subjects with a section of their own: a citation on a line that names the subject (or right
+# after a line that does, for comments that wrap) must cite that section. A heading that exists is
+# not enough: renumbering once left global localization citing §3.10, the SLAM reference table.
+TOPIC_SECTIONS = {"3.11": re.compile(r"global locali[sz]ation|kidnap|recovery|KLD", re.I)}
 
 
 def spec_contents(spec):
@@ -166,11 +170,13 @@ def citations(args):
     root = pathlib.Path(args.root)
     sections, errata = spec_contents(root / "docs" / "specification.md")
     files = [root / "README.md"]
-    for folder in ("include", "src", "apps", "tests", "python", "docs", "examples", "bench"):
+    for folder in ("include", "src", "apps", "tests", "python", "docs", "examples", "bench",
+                   "data/report"):  # data/report: the report's text, which cites the spec too
         files += [p for p in sorted((root / folder).rglob("*"))
-                  if p.suffix in (".hpp", ".cpp", ".py", ".md", ".txt", ".cmake", ".in")]
+                  if p.suffix in (".hpp", ".cpp", ".py", ".md", ".txt", ".cmake", ".in", ".json")]
     problems, count = [], 0
     for path in files:
+        previous = ""
         for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
             where = f"{path.relative_to(root)}:{number}"
             for m in CITATION.finditer(line):
@@ -180,6 +186,12 @@ def citations(args):
                     if section not in sections:
                         problems.append(f"{where}: cites spec §{section}, not a heading of "
                                         f"docs/specification.md")
+                for section, subject in TOPIC_SECTIONS.items():
+                    named = subject.search(previous + " " + line)
+                    if named and section not in cited:
+                        problems.append(f"{where}: cites spec §{', §'.join(cited)} next to "
+                                        f"'{named.group(0)}', whose section is §{section}")
+            previous = line
             for m in ERRATUM_CITED.finditer(line):
                 if NOT_AN_ERRATUM.search(line[:m.start()]):
                     continue
