@@ -6,6 +6,7 @@
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/share_dir.hpp"
+#include "json_input.hpp"
 #include "report.hpp"
 
 namespace implicit::app::report {
@@ -24,7 +25,7 @@ json read_object(const std::filesystem::path& file, const char* what) {
         file.string(), what, file.filename().string()));
   json j;
   try {
-    j = json::parse(in);
+    j = parse_json_bounded(in, file);
   } catch (const json::parse_error& e) {
     throw ParseError(fmt::format("{}: not valid JSON ({})", file.string(), e.what()));
   }

@@ -7,6 +7,7 @@
 
 #include "implicit/core/error.hpp"
 #include "implicit/robot/csv_table.hpp"
+#include "json_input.hpp"
 
 namespace implicit::app {
 namespace {
@@ -15,18 +16,23 @@ using nlohmann::json;
 
 /// Floating-point values must lie within +-2^31: the report reads counts (runs, particles) as
 /// int, and converting a larger double to int is undefined behaviour. No run writes more.
+/// One recursion per level: `depth` stops it at the parser's bound (json_input.hpp), so that a
+/// document that did not come through parse_json_bounded cannot overflow the stack either.
 void check_number_ranges(const json& value, const std::string& where,
-                         const std::filesystem::path& file) {
+                         const std::filesystem::path& file, int depth = 0) {
   constexpr double kLimit = 2147483648.0;
+  if (depth > kMaxJsonDepth)
+    throw ParseError(fmt::format("{}: expected JSON nested at most {} levels deep, got more at {}",
+                                 file.string(), kMaxJsonDepth, printable(where, 60)));
   if (value.is_number_float() && !(std::abs(value.get<double>()) < kLimit))
     throw ParseError(fmt::format("{}: the number at {} is {}, out of range (|x| < 2^31)",
                                  file.string(), where.empty() ? "/" : where, value.dump()));
   if (value.is_object())
     for (const auto& [key, item] : value.items())
-      check_number_ranges(item, where + "/" + key, file);
+      check_number_ranges(item, where + "/" + key, file, depth + 1);
   if (value.is_array())
     for (std::size_t i = 0; i < value.size(); ++i)
-      check_number_ranges(value[i], where + "/" + std::to_string(i), file);
+      check_number_ranges(value[i], where + "/" + std::to_string(i), file, depth + 1);
 }
 
 }  // namespace
@@ -34,7 +40,7 @@ void check_number_ranges(const json& value, const std::string& where,
 json parse_results(std::string_view text, const std::filesystem::path& file) {
   json results;
   try {
-    results = json::parse(text.begin(), text.end());
+    results = parse_json_bounded(text, file);
   } catch (const json::exception& e) {
     // parse_error, or out_of_range for a number beyond a double (1e999)
     throw ParseError(fmt::format("{}: {}", file.string(), e.what()));

@@ -12,8 +12,9 @@
 namespace implicit::app {
 
 /// Parses `text` (the contents of `file`, named in errors) as a results.json. Throws
-/// implicit::ParseError naming the file for malformed JSON, a number beyond a double, another
-/// program's JSON, or a number out of range (naming its JSON pointer).
+/// implicit::ParseError naming the file for malformed JSON, nesting deeper than kMaxJsonDepth
+/// (json_input.hpp), a number beyond a double, another program's JSON, or a number out of range
+/// (naming its JSON pointer).
 nlohmann::json parse_results(std::string_view text, const std::filesystem::path& file);
 
 /// Reads and parses `file` as above; throws implicit::InvalidArgument if it cannot be read.

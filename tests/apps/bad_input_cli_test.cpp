@@ -195,6 +195,23 @@ TEST(Cli, ReportOnlyWithACountOutOfRangeNamesItsPlace) {
       << r.err;
 }
 
+// A results.json nested 20 000 levels deep overflowed the stack in the recursive range check;
+// the parser now refuses nesting beyond 64 levels, naming the file and the level.
+TEST(Cli, ReportOnlyWithJsonNestedTooDeepNamesTheFileAndTheLevel) {
+  TempDir dir("report_only_deep");
+  std::ofstream(dir.path() / "results.json")
+      << R"({"schema": "implicit-reproduce-1", "experiments": {"slit": )" << std::string(20000, '[')
+      << std::string(20000, ']') << "}}";
+  const auto r =
+      run_cli("reproduce --report-only --no-figures --quiet --out " + dir.path().string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find((dir.path() / "results.json").string() +
+                       ": expected JSON nested at most 64 levels deep, got an array or object at "
+                       "level 65"),
+            std::string::npos)
+      << r.err;
+}
+
 // slit, arm and himmelblau write their CSVs like mcl and slam: under temporary names renamed
 // only when complete, so an unwritable folder is an error (exit 1) naming the file.
 TEST(Cli, ControlCommandsOutIntoUnwritableFolderExit1) {

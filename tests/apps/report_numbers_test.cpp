@@ -128,6 +128,24 @@ TEST(ReportNumbersFile, MalformedFilesAreErrorsNamingTheFile) {
   EXPECT_EQ(report::read_numbers_file(file, {"table2"})["table2"]["runs"], 500);
 }
 
+// Nesting is bounded while parsing (apps/json_input.hpp), before anything recurses over it.
+TEST(ReportNumbersFile, NestingBeyondTheBoundIsAnErrorNamingTheFileAndTheLevel) {
+  TempDir dir("report_numbers_deep");
+  const auto file = dir.path() / "paper.json";
+  write_file(file, "{\"source\": \"x\", \"table2\": " + std::string(20000, '[') +
+                       std::string(20000, ']') + "}");
+  EXPECT_THROW(report::read_numbers_file(file, {"table2"}), implicit::ParseError);
+  EXPECT_NE(message_of(file).find(file.string() +
+                                  ": expected JSON nested at most 64 levels deep, got an array or "
+                                  "object at level 65"),
+            std::string::npos)
+      << message_of(file);
+  // 64 levels are read.
+  write_file(file, "{\"source\": \"x\", \"table2\": {\"a\": " + std::string(62, '[') +
+                       std::string(62, ']') + "}}");
+  EXPECT_NO_THROW(report::read_numbers_file(file, {"table2"}));
+}
+
 TEST(ReportNumbersFile, TheInstalledFilesHaveEveryTableTheReportReads) {
   // build/share/implicit/data mirrors the install (core/share_dir.hpp).
   const json paper = report::paper_numbers();
