@@ -1,4 +1,6 @@
 // `implicit slam`: EKF-SLAM, FastSLAM 1.0/2.0 and implicit SLAM (paper §4.2, Table 6, Figure 7).
+#include <cmath>
+
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
@@ -9,6 +11,15 @@
 
 namespace implicit::app {
 namespace {
+
+/// A metric of the JSON for the text summary: null (not computable, e.g. the map metrics of a
+/// data set without a true map, the errors of a log without truth) reads "n/a" rather than a
+/// number that looks like a result.
+std::string metric_text(const nlohmann::json& value, int digits, const char* unit = "") {
+  // In memory a metric that could not be computed is a NaN number; only dump() makes it null.
+  if (!value.is_number() || !std::isfinite(value.get<double>())) return "n/a";
+  return fmt::format("{:.{}f}{}", value.get<double>(), digits, unit);
+}
 
 struct SlamCommand {
   SlamSettings settings;
@@ -111,14 +122,14 @@ void setup_slam(CLI::App& sub) {
     }
     fmt::print(
         "SLAM {}, M = {}, {} data sets ({} association):\n"
-        "  err% = {:.2f} ± {:.2f} (aligned {:.2f}), pose RMSE {:.3f} m\n"
-        "  map RMSE {:.3f} m, map shape {:.3f} m, {:.1f} landmarks\n"
+        "  err% = {} ± {} (aligned {}), pose RMSE {}\n"
+        "  map RMSE {}, map shape {}, {:.1f} landmarks\n"
         "  {:.3f} ms CPU per step, peak memory {:.1f} MB, {:.1f} s\n",
         r["method"].get<std::string>(), r["particles"].get<int>(), r["datasets"].get<int>(),
-        r["association"].get<std::string>(), r["error_percent_mean"].get<double>(),
-        r["error_percent_std"].get<double>(), r["error_aligned_percent_mean"].get<double>(),
-        r["rmse_pose_m"].get<double>(), r["rmse_map_m"].get<double>(),
-        r["map_shape_m"].get<double>(), r["landmarks_mean"].get<double>(),
+        r["association"].get<std::string>(), metric_text(r["error_percent_mean"], 2),
+        metric_text(r["error_percent_std"], 2), metric_text(r["error_aligned_percent_mean"], 2),
+        metric_text(r["rmse_pose_m"], 3, " m"), metric_text(r["rmse_map_m"], 3, " m"),
+        metric_text(r["map_shape_m"], 3, " m"), r["landmarks_mean"].get<double>(),
         r["cpu_ms_per_step"].get<double>(), r["peak_memory_mb"].get<double>(),
         r["seconds"].get<double>());
     check();

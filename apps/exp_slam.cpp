@@ -48,6 +48,9 @@ double mean(const std::vector<double>& v) {
 }
 
 double stddev(const std::vector<double>& v) {
+  // A metric that could not be computed (NaN, e.g. the map metrics without a true map) has no
+  // spread either, also over a single run: null in the JSON, not 0.
+  if (std::any_of(v.begin(), v.end(), [](double x) { return std::isnan(x); })) return std::nan("");
   if (v.size() < 2) return 0.0;
   const double m = mean(v);
   double s = 0.0;

@@ -135,6 +135,11 @@ SlamMetrics evaluate(const SlamDataset& data, const SlamRun& run) {
   }
   m.nees_mean = m.nees_steps > 0 ? nees_sum / static_cast<double>(m.nees_steps)
                                  : std::numeric_limits<double>::quiet_NaN();
+  if (data.landmarks.empty()) {
+    // No true map (Victoria Park, GPS only): NaN (null in JSON, "n/a" in text), not an error of 0.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    m.rmse_map_m = m.map_shape_m = m.map_error_percent = nan;
+  }
   RigidTransform2 align;
   if (est.size() >= 2) {
     double raw = 0.0, fro = 0.0;

@@ -142,6 +142,37 @@ TEST(Cli, SlamSensorNoiseGateAndNewLandmarkDensityReachTheFilter) {
   EXPECT_NE(bad.err.find("--range-sd"), std::string::npos) << bad.err;
 }
 
+// A log without a true map (like Victoria Park): the map metrics cannot be computed, so they are
+// null in the JSON and "n/a" in the text, not an error of 0.000 m that looks like a result; the
+// path, which has truth, is still scored.
+TEST(Cli, SlamWithoutATrueMapReportsNoMapMetrics) {
+  TempDir dir("slam_no_map");
+  std::string log =
+      "vehicle ute dt=0.025 L=2.83 H=0.76 a=3.78 b=0.5\ninitial 0 0 0 0 0.1 0.1 0.01\n";
+  for (int n = 1; n <= 80; ++n) {
+    const std::string t = std::to_string(0.025 * n);
+    log += "control " + t + " 2 0\n";
+    if (n % 8 == 0) log += "scan " + t + " 2\nobs 6 1.2\nobs 9 0.6\n";  // unlabelled: no map
+    log += "truth " + t + " " + std::to_string(0.05 * n) + " 0\n";
+  }
+  implicit::test::write_file(dir.path() / "no_map.log", log);
+  const std::string args =
+      "slam --method fastslam2 -M 5 --association ml --datasets 1 --quiet "
+      "--data " +
+      (dir.path() / "no_map.log").string();
+  const auto j = run_cli(args + " --json");
+  ASSERT_EQ(j.code, 0) << j.err;
+  const auto r = nlohmann::json::parse(j.out);
+  for (const char* key : {"rmse_map_m", "rmse_map_m_std", "map_shape_m", "map_shape_m_std"})
+    EXPECT_TRUE(r[key].is_null()) << key << ": " << r[key];
+  EXPECT_GT(r["landmarks_mean"].get<double>(), 0.0);
+  EXPECT_TRUE(r["rmse_pose_m"].is_number()) << r["rmse_pose_m"];
+  const auto text = run_cli(args);
+  ASSERT_EQ(text.code, 0) << text.err;
+  EXPECT_NE(text.out.find("map RMSE n/a, map shape n/a,"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("pose RMSE 0."), std::string::npos) << text.out;
+}
+
 // `implicit mcl --init global --duration D` filters only the log's first D seconds (from the first
 // control): fewer steps than the whole log, and the error traces end just before D.
 TEST(Cli, MclGlobalDurationCutsTheLog) {

@@ -283,6 +283,25 @@ TEST(SlamData, RobotLogRoundTrip) {
   EXPECT_THROW(read_slam_log(path), ParseError);
 }
 
+// Without a true map (Victoria Park) the map metrics are NaN, not 0: there is nothing to compare
+// the estimated map with. The path metrics do not depend on the map.
+TEST(SlamMetrics, WithoutATrueMapTheMapMetricsAreNaN) {
+  const SlamDataset d = short_data(300, 3);
+  SlamOptions opt;
+  opt.method = SlamMethod::kEkf;
+  const SlamRun run = run_filter(d, opt);
+  const SlamMetrics with_map = evaluate(d, run);
+  ASSERT_TRUE(std::isfinite(with_map.map_shape_m));
+  SlamDataset no_map = d;
+  no_map.landmarks.clear();
+  const SlamMetrics m = evaluate(no_map, run);
+  EXPECT_TRUE(std::isnan(m.rmse_map_m));
+  EXPECT_TRUE(std::isnan(m.map_shape_m));
+  EXPECT_TRUE(std::isnan(m.map_error_percent));
+  EXPECT_EQ(m.error_percent, with_map.error_percent);
+  EXPECT_EQ(m.landmarks, with_map.landmarks);
+}
+
 TEST(SlamMetrics, RigidAlignmentRecoversRotationAndTranslation) {
   std::vector<Vec<2>> from = {Vec<2>(0, 0), Vec<2>(4, 1), Vec<2>(-2, 3), Vec<2>(1, -5)};
   const double a = 0.3;

@@ -11,7 +11,9 @@
 //   rmse_pose_m           sqrt(mean |p_hat - p|^2); rmse_heading_rad with wrapped differences;
 //   rmse_map_m            sqrt(mean |m_hat - m|^2) over the landmarks in the estimated map;
 //   map_shape_m           the same after the best rigid (rotation + translation) alignment of the
-//                         estimated map onto the true one (Umeyama/Horn, no scale);
+//                         estimated map onto the true one (Umeyama/Horn, no scale); both, and
+//                         map_error_percent, are NaN when the data set has no true map (e.g.
+//                         Victoria Park): nothing to compare with, not an error of 0;
 //   error_aligned_percent err% of the path after applying that same map alignment (when the
 //                         data set has no true map, e.g. GPS only: the path is aligned to itself);
 //   nees_mean             mean over steps of e^T P^-1 e, e = (p_hat - p, wrap(b_hat - b)).
@@ -57,9 +59,9 @@ struct SlamMetrics {
   double rmse_pose_m = 0.0;
   double rmse_pose_aligned_m = 0.0;  ///< position RMSE after the alignment (as error_aligned)
   double rmse_heading_rad = 0.0;
-  double rmse_map_m = 0.0;
-  double map_shape_m = 0.0;
-  double map_error_percent = 0.0;  ///< 100 |Theta_hat - Theta|_F / |Theta|_F
+  double rmse_map_m = 0.0;         ///< NaN without a true map
+  double map_shape_m = 0.0;        ///< NaN without a true map
+  double map_error_percent = 0.0;  ///< 100 |Theta_hat - Theta|_F / |Theta|_F; NaN without a map
   double alignment_angle_rad = 0.0;
   double nees_mean = 0.0;  ///< over steps with an SPD covariance
   std::size_t nees_steps = 0;
