@@ -22,7 +22,8 @@ struct FreeSpace {
     const Eigen::Vector2i c = cells[std::min(k, cells.size() - 1)];
     const double h = map.resolution();
     const Vec<2> corner = map.origin() + h * c.cast<double>();
-    const Vec<3> u(rng.uniform(), rng.uniform(), rng.uniform());
+    const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();  // in this order
+    const Vec<3> u(ux, uy, uh);
     return robot::Pose(corner(0) + h * u(0), corner(1) + h * u(1), kPi * (2.0 * u(2) - 1.0));
   }
 };

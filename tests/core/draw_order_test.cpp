@@ -169,7 +169,7 @@ TEST(DrawOrder, NoExpressionOfTheRepositoryDrawsTwiceFromOneGenerator) {
   std::vector<std::string> found;
   std::size_t files = 0;
   for (const char* dir :
-       {"include", "src", "apps", "examples", "bench", "tests", "python", "fuzz"}) {
+       {"include", "src", "apps", "experiments", "examples", "bench", "tests", "python", "fuzz"}) {
     if (!std::filesystem::is_directory(root / dir)) continue;
     for (const auto& e : std::filesystem::recursive_directory_iterator(root / dir)) {
       const auto ext = e.path().extension();

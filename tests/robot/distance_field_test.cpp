@@ -154,7 +154,8 @@ TEST(DistanceField, InterpolationEqualsTheKernelSumInsideAndAroundTheGrid) {
   const DistanceField f(g, 0.7);
   for (int k = 0; k < 4000; ++k) {
     // Up to 6 cells outside the grid on every side, the band where padding runs out included.
-    const Vec<2> p(1.0 - 1.2 + 3.6 * rng.uniform(), -2.0 - 1.2 + 4.2 * rng.uniform());
+    const double ux = rng.uniform(), uy = rng.uniform();  // in this order
+    const Vec<2> p(1.0 - 1.2 + 3.6 * ux, -2.0 - 1.2 + 4.2 * uy);
     const Vec<2> bad = Vec<2>::Constant(std::nan(""));
     Vec<2> grad = bad;
     EXPECT_NEAR(f.distance(p, Interpolation::kBicubic, &grad), kernel_sum(f, p, keys_kernel), 1e-12)

@@ -75,7 +75,8 @@ TEST(LikelihoodField, NearestCellIsTheCellValueAnywhereInTheCell) {
   const PreparedScan z = model.prepare(s);
   Rng rng({7, 0, 0, 0});
   for (int k = 0; k < 50; ++k) {
-    const Pose x(0.5 + 2.0 * rng.uniform(), 0.8 + 2.0 * rng.uniform(), rng.uniform() - 0.5);
+    const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();  // in this order
+    const Pose x(0.5 + 2.0 * ux, 0.8 + 2.0 * uy, uh - 0.5);
     const double c = std::cos(x(2)), sn = std::sin(x(2));
     double expected = 0.0;
     for (const Vec<2>& e : z.end_points) {
@@ -110,7 +111,8 @@ TEST(LikelihoodField, GradientMatchesCentralDifferencesAndGaussNewtonIsPsd) {
   const PreparedScan z = model.prepare(s);
   Rng rng({11, 0, 0, 0});
   for (int k = 0; k < 40; ++k) {
-    const Pose x(1.0 + 5.5 * rng.uniform(), 1.0 + 3.8 * rng.uniform(), 2 * kPi * rng.uniform());
+    const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();  // in this order
+    const Pose x(1.0 + 5.5 * ux, 1.0 + 3.8 * uy, 2 * kPi * uh);
     Vec<3> g = Vec<3>::Zero();
     Mat3 h = Mat3::Zero();
     model.negative_log_likelihood(z, x, &g, &h);
@@ -177,8 +179,9 @@ TEST(LikelihoodField, EqualsTheSumOfBeamDensitiesForEveryModeAndDensityForm) {
       for (int k = 0; k < 30; ++k) {
         // Inside the room, and (k >= 25) around and far outside the map.
         const double spread = k < 25 ? 1.0 : 40.0;
-        const Pose x(4.0 + spread * 3.5 * (2 * rng.uniform() - 1),
-                     3.0 + spread * 2.5 * (2 * rng.uniform() - 1), 2 * kPi * rng.uniform());
+        const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();  // in order
+        const Pose x(4.0 + spread * 3.5 * (2 * ux - 1), 3.0 + spread * 2.5 * (2 * uy - 1),
+                     2 * kPi * uh);
         double largest = 0.0;
         const double expected = sum_of_beam_densities(model, z, x, &largest);
         // Rounding: the nearest table holds each beam's density as a float (2^-24 relative);

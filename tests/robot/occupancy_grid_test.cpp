@@ -194,7 +194,8 @@ TEST(CastRay, RandomRaysMatchTheNearestCellBoxEntry) {
         if (rng.uniform() < density) g.at(ix, iy) = OccupancyGrid::kOccupied;
     for (int ray = 0; ray < 50; ++ray) {
       // Starts inside the grid and up to 2 m outside it.
-      const Vec<2> from(-4.0 + 10.9 * rng.uniform(), -1.0 + 9.1 * rng.uniform());
+      const double ux = rng.uniform(), uy = rng.uniform();  // in this order
+      const Vec<2> from(-4.0 + 10.9 * ux, -1.0 + 9.1 * uy);
       const double a = 2 * kPi * rng.uniform() - kPi;
       const double max_range = 12.0 * rng.uniform();
       double expected = max_range;
