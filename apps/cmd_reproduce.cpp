@@ -354,7 +354,7 @@ int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt) {
 
 int reproduce(RunContext ctx, const ReproduceOptions& opt) {
   ctx.out_dir = std::filesystem::absolute(ctx.out_dir);
-  std::filesystem::create_directories(ctx.out_dir);
+  create_out_dir(ctx.out_dir);
   json results;
   if (opt.report_only) {
     const auto file = ctx.out_dir / "results.json";

@@ -7,6 +7,7 @@
 
 #include "cmd_simulate_laser.hpp"
 #include "context.hpp"
+#include "implicit/core/error.hpp"
 #include "implicit/robot/simulate.hpp"
 #include "registry.hpp"
 #include "vehicle.hpp"
@@ -105,7 +106,11 @@ void setup_simulate(CLI::App& sub) {
       log.vehicle = robot::declare_vehicle(p);
     }
     const std::string out = c.ctx.out_dir.string();
-    robot::write_robot_log(out, log);
+    try {
+      robot::write_robot_log(out, log);
+    } catch (const InvalidArgument& e) {  // the library names the file, not the flag
+      throw InvalidArgument(fmt::format("--out: {}", e.what()));
+    }
     std::size_t detections = 0;
     for (const auto& s : log.scans) detections += s.observations.size();
     nlohmann::json j{{"file", out},

@@ -79,9 +79,25 @@ void Progress::draw(std::size_t done, bool final, const std::string& note) {
   std::fflush(stderr);
 }
 
+void create_out_dir(const std::filesystem::path& dir) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(dir, ec)) return;
+  if (std::filesystem::exists(dir, ec))
+    throw InvalidArgument(
+        fmt::format("--out {}: expected a folder for the output files, got a "
+                    "file that is not a folder",
+                    dir.string()));
+  std::filesystem::create_directories(dir, ec);
+  if (ec)
+    throw InvalidArgument(
+        fmt::format("--out {}: expected a folder that can be created for the "
+                    "output files, got an error ({})",
+                    dir.string(), ec.message()));
+}
+
 std::filesystem::path RunContext::csv_path(const std::string& name) const {
   if (out_dir.empty()) return {};
-  std::filesystem::create_directories(out_dir);
+  create_out_dir(out_dir);
   return out_dir / name;
 }
 
@@ -152,7 +168,8 @@ void install_signal_handlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-OutputFile::OutputFile(std::filesystem::path path, Mode mode) : path_(std::move(path)) {
+OutputFile::OutputFile(std::filesystem::path path, Mode mode, std::string flag)
+    : path_(std::move(path)), flag_(std::move(flag)) {
   // Same folder, so that the rename is atomic; the pid keeps concurrent runs apart.
   temporary_ = path_;
   temporary_ += fmt::format(".tmp{}", ::getpid());
@@ -186,8 +203,9 @@ void OutputFile::commit() {
     std::filesystem::remove(temporary_, ec);
     release_pending(slot_);
     slot_ = -1;
-    throw InvalidArgument(fmt::format("{}: expected a writable output file, got a failed write{}",
-                                      path_.string(), ec ? " (" + ec.message() + ")" : ""));
+    throw InvalidArgument(
+        fmt::format("{}: {}: expected a writable output file, got a failed write{}", flag_,
+                    path_.string(), ec ? " (" + ec.message() + ")" : ""));
   }
   committed_ = true;
   release_pending(slot_);

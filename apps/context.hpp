@@ -63,8 +63,14 @@ struct RunContext {
 
   bool show_progress() const { return !quiet && !json; }
   /// Path of a CSV file in out_dir (creates the folder); empty path when out_dir is empty.
+  /// Throws implicit::InvalidArgument naming --out (create_out_dir) when it cannot be made.
   std::filesystem::path csv_path(const std::string& name) const;
 };
+
+/// Creates `dir`, the folder of --out, with its parents. Throws implicit::InvalidArgument naming
+/// --out, the folder and why (a file of that name, a read-only or virtual file system, ...):
+/// the raw filesystem error named neither the flag nor what was expected.
+void create_out_dir(const std::filesystem::path& dir);
 
 /// An output file written under a temporary name beside `path` and renamed over it by commit(),
 /// which first checks that every write succeeded: a failed or killed run leaves the previous file
@@ -72,11 +78,14 @@ struct RunContext {
 /// Append mode starts from a copy of the existing file (the *_summary.csv files).
 ///   OutputFile out(ctx.csv_path("runs.csv"));
 ///   out.stream() << "a,b\n";
-///   out.commit();  // throws implicit::InvalidArgument naming the file if a write failed
+///   out.commit();  // throws implicit::InvalidArgument naming `flag` and the file if a write
+///   failed
 class OutputFile {
  public:
   enum class Mode { kReplace, kAppend };
-  explicit OutputFile(std::filesystem::path path, Mode mode = Mode::kReplace);
+  /// `flag`: the option that chose where the file goes, named in the error.
+  explicit OutputFile(std::filesystem::path path, Mode mode = Mode::kReplace,
+                      std::string flag = "--out");
   ~OutputFile();
   OutputFile(const OutputFile&) = delete;
   OutputFile& operator=(const OutputFile&) = delete;
@@ -92,6 +101,7 @@ class OutputFile {
 
  private:
   std::filesystem::path path_, temporary_;
+  std::string flag_;
   std::unique_ptr<std::ofstream> out_;
   bool fresh_ = true;
   bool committed_ = false;

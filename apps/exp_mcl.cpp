@@ -108,7 +108,9 @@ robot::TruthTrack load_or_make_reference(const LocalizationProblem& problem,
   std::filesystem::create_directories(dir, ec);
   // Written under a temporary name and renamed: MPI ranks (or two runs) that make the same cache
   // at once each replace it whole, with the same content, and a reader never sees half a file.
-  OutputFile cache(file);
+  const bool temporary = dir == std::filesystem::temp_directory_path() / "implicit-cache";
+  OutputFile cache(file, OutputFile::Mode::kReplace,
+                   temporary ? "the reference cache in the system's temp folder" : "--out");
   std::ostream& out = cache.stream();
   out << "# " << key << "\nstep,x,y,heading\n";
   for (std::size_t n = 0; n < t.position.size(); ++n)

@@ -140,14 +140,21 @@ std::string csv_value(const json& j) {
 
 void write_csv(const std::filesystem::path& file, const std::vector<std::string>& columns,
                const std::vector<std::vector<std::string>>& rows) {
+  // The tables go into the folder of --out (or of --report-only's results.json, the same flag).
+  auto fail = [&file](const char* what) {
+    throw InvalidArgument(
+        fmt::format("--out: {}: expected a writable output file, got {}", file.string(), what));
+  };
   std::ofstream out(file);
-  if (!out) throw InvalidArgument(fmt::format("cannot write {}", file.string()));
+  if (!out) fail("one that cannot be opened");
   for (std::size_t i = 0; i < columns.size(); ++i) out << (i ? "," : "") << columns[i];
   out << "\n";
   for (const auto& row : rows) {
     for (std::size_t i = 0; i < row.size(); ++i) out << (i ? "," : "") << row[i];
     out << "\n";
   }
+  out.flush();
+  if (!out) fail("a failed write");
 }
 
 /// One row per successful configuration: settings columns, then result columns.

@@ -224,6 +224,36 @@ TEST(Cli, ControlCommandsOutIntoUnwritableFolderExit1) {
   }
 }
 
+// Every subcommand that writes files into --out: a folder that cannot be created (procfs refuses
+// new folders even to root), a file in its place, or a folder that refuses files is an error
+// (exit 1) naming --out and the path, not a raw filesystem error.
+TEST(Cli, EveryOutputErrorNamesOutAndThePath) {
+  TempDir dir("out_is_a_file");
+  const std::string file = (dir.path() / "a_file").string();
+  std::ofstream(file) << "x\n";
+  const std::vector<std::pair<std::string, std::string>> outs = {
+      {"/proc/implicit/none", "--out /proc/implicit/none: expected a folder that can be created"},
+      {file, "--out " + file + ": expected a folder for the output files, got a file"},
+      {"/proc/self", "--out: /proc/self/"}};
+  for (const std::string command :
+       {"arm", "himmelblau --runs 2 -M 10", "slit --runs 2 --naive-small 5 --naive-large 5",
+        "mcl --runs 1 -M 20", "mcl --init global --runs 1 -M 20 --duration 50",
+        "slam --method ekf --datasets 1", "proposal-gain --runs 1 --duration 10",
+        "reproduce --quick --only arm --no-figures"})
+    for (const auto& [out, expected] : outs) {
+      const auto r = run_cli(command + " --quiet --out " + out);
+      EXPECT_EQ(r.code, 1) << command << " --out " << out << "\n" << r.err;
+      EXPECT_NE(r.err.find(expected), std::string::npos) << command << " --out " << out << "\n"
+                                                         << r.err;
+    }
+  // simulate's --out is the log file itself.
+  const auto r = run_cli("simulate --quiet --out /proc/implicit/none.log");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("--out: expected a writable file, got '/proc/implicit/none.log'"),
+            std::string::npos)
+      << r.err;
+}
+
 TEST(Cli, ControlCommandsLeaveOnlyCompleteFiles) {
   TempDir dir("control_outputs");
   const auto r =
