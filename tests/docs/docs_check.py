@@ -7,7 +7,8 @@
   citations  every "spec §x.y" cited in the sources and docs is a heading of docs/specification.md,
              and every erratum "E<n>" cited is one the specification lists
   umbrella   implicit/implicit.hpp includes every public header
-  versions   CMakeLists.txt, CITATION.cff, CHANGELOG.md and `implicit --version` name one version
+  versions   CMakeLists.txt, CITATION.cff, CHANGELOG.md and `implicit --version` name one version,
+             and the changelog dates it as CITATION.cff does (not "unreleased")
 
 The conventions for authors are in docs/design.md, "Tested documentation":
   ```cpp                        a complete program: compiled, linked with implicit::implicit, run
@@ -230,15 +231,28 @@ def versions(args):
     m = re.search(r"^version:\s*\"?([0-9.]+)", (root / "CITATION.cff").read_text(), re.M)
     found["CITATION.cff version"] = m.group(1) if m else None
     # The newest section of the changelog is the first heading that names a version.
-    m = re.search(r"^## .*?(\d+\.\d+\.\d+)", (root / "CHANGELOG.md").read_text(), re.M)
+    changelog = (root / "CHANGELOG.md").read_text()
+    m = re.search(r"^## .*?(\d+\.\d+\.\d+).*$", changelog, re.M)
     found["CHANGELOG.md newest section"] = m.group(1) if m else None
+    # A released version (CITATION.cff's date-released) is not also "unreleased" in the
+    # changelog, and both give it the same date; ongoing work goes under "## Unreleased".
+    released = re.search(r"^date-released:\s*\"?([0-9-]+)", (root / "CITATION.cff").read_text(),
+                         re.M)
+    consistent = True
+    if m and released:
+        heading = m.group(0)
+        if "unreleased" in heading.lower() or released.group(1) not in heading:
+            print(f"CHANGELOG.md: the section of {m.group(1)} is '{heading}', expected a released "
+                  f"version dated {released.group(1)} as in CITATION.cff (ongoing work goes "
+                  f"under '## Unreleased')")
+            consistent = False
     if args.cli:
         out = subprocess.run([args.cli, "--version"], capture_output=True, text=True).stdout
         m = re.match(r"implicit (\d+\.\d+\.\d+) ", out)
         found["implicit --version"] = m.group(1) if m else None
     for where, version in found.items():
         print(f"{where}: {version}")
-    return 0 if None not in found.values() and len(set(found.values())) == 1 else 1
+    return 0 if consistent and None not in found.values() and len(set(found.values())) == 1 else 1
 
 
 def main():
