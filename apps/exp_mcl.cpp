@@ -195,17 +195,23 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   MclSetup setup;
   setup.start = std::chrono::steady_clock::now();
   setup.log = load_log(s.data_dir, robot::UteModel());  // Car Park folders: the Ute's geometry
+  const std::string data_name = s.data_dir.empty() ? "data/carpark" : s.data_dir;
   setup.model_name = resolve_model(
       "mcl", s.model, setup.log.vehicle ? std::optional(setup.log.vehicle->model) : std::nullopt,
-      s.data_dir.empty() ? "data/carpark" : s.data_dir);
+      data_name);
+  const bool assumed = !setup.log.vehicle;  // the Car Park folders declare the Ute
   const MotionNoise noise{s.control_sd, s.state_sd};
   const robot::RangeBearingSensor sensor = mcl_sensor(s);
+  nlohmann::json j;
   if (setup.model_name == "unicycle") {
     require(s.truth == "gps",
             "mcl --truth reference: the GPS-aided reference run is the Car Park's (--model ute), "
             "got --model unicycle");
-    return run_mcl_model(s, ctx, robot::UnicycleModel(unicycle_params(setup.log, noise)), sensor,
-                         setup);
+    const robot::UnicycleParams up = unicycle_params(setup.log, noise);
+    if (assumed) warn_vehicle_assumed("mcl", data_name, robot::declare_vehicle(up));
+    j = run_mcl_model(s, ctx, robot::UnicycleModel(up), sensor, setup);
+    j["vehicle_assumed"] = assumed;
+    return j;
   }
   // Models (spec §3.1, §3.2, §3.9): config A is the paper's P = 0.5, config B P = 0.1.
   robot::UteParams params;
@@ -213,8 +219,11 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   params.control_std = Vec<2>(setup.p, setup.p);
   if (s.q >= 0) params.state_std.head<2>() = Vec<2>(s.q, s.q);
   params = ute_params(setup.log, noise, params);
+  if (assumed) warn_vehicle_assumed("mcl", data_name, robot::declare_vehicle(params));
   setup.p = params.control_std(0);
-  return run_mcl_model(s, ctx, robot::UteModel(params), sensor, setup);
+  j = run_mcl_model(s, ctx, robot::UteModel(params), sensor, setup);
+  j["vehicle_assumed"] = assumed;
+  return j;
 }
 
 namespace {

@@ -266,6 +266,16 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     if (s.dense_landmarks > 0)
       scenario = slam::make_dense_scenario(scenario, s.dense_laps, s.dense_landmarks, ctx.seed);
   }
+  // Logs that declare no vehicle (neither record nor `# vehicle` comment) run as the Car Park's
+  // Ute (or the --model given, with its defaults): said loudly, and recorded in the JSON.
+  bool vehicle_assumed = false;
+  for (const auto& d : logs) {
+    if (!d.vehicle_assumed) continue;
+    vehicle_assumed = true;
+    warn_vehicle_assumed("slam", d.name,
+                         model == "ute" ? robot::declare_vehicle(d.vehicle)
+                                        : robot::VehicleDeclaration{model, {{"dt", d.vehicle.dt}}});
+  }
   const auto k_runs = static_cast<std::size_t>(s.datasets);
   std::vector<RunSummary> runs(k_runs);
   Progress bar(fmt::format("SLAM {} M={}", s.method, particles), k_runs, ctx.show_progress());
@@ -345,6 +355,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["data"] =
       logs.empty() ? (s.dense_landmarks > 0 ? scenario.name : "carpark-synthetic") : data0.name;
   j["model"] = model;
+  j["vehicle_assumed"] = vehicle_assumed;
   j["laser_every"] = s.laser_every;
   // The filter's model, so that a run on real data can be repeated from its JSON alone.
   j["control_noise"] = s.control_noise;

@@ -1,5 +1,7 @@
 #include "vehicle.hpp"
 
+#include <cstdio>
+
 #include <fmt/format.h>
 
 #include "implicit/core/error.hpp"
@@ -48,6 +50,19 @@ std::string resolve_model(const std::string& command, const std::string& flag,
           command, flag, data_name, *declared, controls_of(*declared), flag, controls_of(flag),
           *declared);
   return *declared;
+}
+
+void warn_vehicle_assumed(const std::string& command, const std::string& data_name,
+                          const robot::VehicleDeclaration& used) {
+  std::string parameters;
+  for (const auto& [key, value] : used.parameters)
+    parameters += fmt::format("{}{}={}", parameters.empty() ? "" : " ", key, value);
+  fmt::print(stderr,
+             "implicit {}: warning: the log '{}' declares no vehicle (no 'vehicle' record): it "
+             "runs as the {} with {}{}; add a 'vehicle' record (docs/formats.md) if another "
+             "robot drove it\n",
+             command, data_name, used.model, parameters,
+             used.model == "ute" ? ", the Car Park's car" : "");
 }
 
 robot::UteParams ute_params(const robot::RobotLog& log, const MotionNoise& noise,

@@ -18,6 +18,12 @@ namespace implicit::app {
 std::string resolve_model(const std::string& command, const std::string& flag,
                           const std::optional<std::string>& declared, const std::string& data_name);
 
+/// A log that declares no vehicle runs as `used` (the Car Park's Ute unless --model says another
+/// model). Numbers of the wrong robot look like results, so this is said on stderr whatever
+/// --quiet and --json say, and the command's JSON records "vehicle_assumed": true.
+void warn_vehicle_assumed(const std::string& command, const std::string& data_name,
+                          const robot::VehicleDeclaration& used);
+
 /// The noise flags of a command: empty vectors keep the model's defaults.
 struct MotionNoise {
   std::vector<double> control_sd;  ///< sd of u1, u2

@@ -87,6 +87,8 @@ class LineParser {
         fail(fmt::format("field '{}': expected a finite number, got '{}'", key, text));
       if (v.parameter(key))
         fail(fmt::format("field '{}': expected each key once, got it a second time", key));
+      if (const std::string range = vehicle_parameter_out_of_range(key, value); !range.empty())
+        fail(fmt::format("field '{}': expected {}, got '{}'", key, range, text));
       v.parameters.emplace_back(key, value);
     }
     return v;
@@ -105,6 +107,18 @@ void require_later(const LineParser& p, double previous, double t, bool has_prev
 }
 
 }  // namespace
+
+std::string vehicle_parameter_out_of_range(std::string_view key, double value) {
+  constexpr double kMaxDt = 60.0;     // [s] a control period; longer is not a vehicle log
+  constexpr double kMaxSize = 100.0;  // [m] wheelbase and LASER offsets
+  if (key == "dt" && !(value > 0.0 && value <= kMaxDt))
+    return fmt::format("a time step in (0, {}] s", kMaxDt);
+  if (key == "L" && !(value > 0.0 && value <= kMaxSize))
+    return fmt::format("a wheelbase in (0, {}] m", kMaxSize);
+  if ((key == "H" || key == "a" || key == "b") && !(std::abs(value) <= kMaxSize))
+    return fmt::format("an offset in [-{0}, {0}] m", kMaxSize);
+  return {};
+}
 
 VehicleDeclaration declare_vehicle(const UteParams& p) {
   return {"ute",

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -344,17 +345,16 @@ std::vector<Pose> read_reference_trace(const std::filesystem::path& path) {
 
 // ---- the plain-text robot log (implicit/robot/log_format.hpp) ----------------------------
 namespace {
-constexpr double kMaxVehicleDt = 60.0;     // [s] a control period; longer is not a vehicle log
-constexpr double kMaxVehicleSize = 100.0;  // [m] wheelbase and LASER offsets
-
 // Optional geometry comment: "# vehicle dt=0.025 L=2.83 H=0.76 a=0.95 b=0.5" (other readers
-// ignore comments; the Car Park values are the default).
-robot::UteParams vehicle_from_comments(const std::vector<std::string>& lines,
-                                       const std::filesystem::path& path) {
+// ignore comments; the Car Park values are the default). Nothing when there is no such comment.
+std::optional<robot::UteParams> vehicle_from_comments(const std::vector<std::string>& lines,
+                                                      const std::filesystem::path& path) {
   robot::UteParams v;
+  bool found = false;
   for (std::size_t i = 0; i < lines.size(); ++i) {
     const auto f = split_ws(lines[i]);
     if (f.size() < 2 || f[0] != "#" || f[1] != "vehicle") continue;
+    found = true;
     for (std::size_t k = 2; k < f.size(); ++k) {
       const auto eq = f[k].find('=');
       if (eq == std::string::npos)
@@ -366,17 +366,11 @@ robot::UteParams vehicle_from_comments(const std::vector<std::string>& lines,
                                      path.string(), i + 1, printable(key)));
       const double val = to_double(f[k].substr(eq + 1), path, i + 1, key);
       // A NaN here drops every observation and a huge dt turns every metric into NaN, both
-      // silently, so the ranges are checked where the line is known.
-      const bool ok = key == "dt"  ? (val > 0.0 && val <= kMaxVehicleDt)
-                      : key == "L" ? (val > 0.0 && val <= kMaxVehicleSize)
-                                   : std::abs(val) <= kMaxVehicleSize;
-      if (!ok)
-        throw ParseError(fmt::format(
-            "{}:{}: vehicle comment: field '{}': expected {}, got '{}'", path.string(), i + 1, key,
-            key == "dt"  ? fmt::format("a time step in (0, {}] s", kMaxVehicleDt)
-            : key == "L" ? fmt::format("a wheelbase in (0, {}] m", kMaxVehicleSize)
-                         : fmt::format("an offset in [-{0}, {0}] m", kMaxVehicleSize),
-            printable(f[k].substr(eq + 1))));
+      // silently, so the ranges (the `vehicle` record's) are checked where the line is known.
+      if (const std::string range = robot::vehicle_parameter_out_of_range(key, val); !range.empty())
+        throw ParseError(fmt::format("{}:{}: vehicle comment: field '{}': expected {}, got '{}'",
+                                     path.string(), i + 1, key, range,
+                                     printable(f[k].substr(eq + 1))));
       if (key == "dt")
         v.dt = val;
       else if (key == "L")
@@ -389,6 +383,7 @@ robot::UteParams vehicle_from_comments(const std::vector<std::string>& lines,
         v.laser_left = val;
     }
   }
+  if (!found) return std::nullopt;
   v.validate();
   return v;
 }
@@ -459,20 +454,33 @@ SlamDataset read_slam_log(const std::filesystem::path& path) {
   std::istringstream in(text);
   const robot::RobotLog log = robot::parse_robot_log(in, path.string());
   robot::UteParams vehicle;
-  if (!log.vehicle) {
-    vehicle = vehicle_from_comments(lines, path);  // the older convention
-  } else if (log.vehicle->model == "ute") {
-    vehicle = robot::ute_params(*log.vehicle);
-  } else if (const auto dt = log.vehicle->parameter("dt")) {
-    // Another robot: the data set needs only its nominal step (the filter brings the model).
-    vehicle.dt = *dt;
-    vehicle.validate();
+  bool assumed = false;
+  try {
+    if (!log.vehicle) {
+      const auto commented = vehicle_from_comments(lines, path);  // the older convention
+      assumed = !commented;
+      if (commented) vehicle = *commented;
+    } else if (log.vehicle->model == "ute") {
+      vehicle = robot::ute_params(*log.vehicle);
+    } else {
+      // Another robot: the data set needs only its nominal step (the filter brings the model).
+      // The shipped unicycle's keys are checked as `mcl` checks them: an unknown one is refused.
+      if (log.vehicle->model == "unicycle") (void)robot::unicycle_params(*log.vehicle);
+      if (const auto dt = log.vehicle->parameter("dt")) {
+        vehicle.dt = *dt;
+        vehicle.validate();
+      }
+    }
+  } catch (const InvalidArgument& e) {  // the declaration's own message names no file
+    throw InvalidArgument(fmt::format("{}: {}", path.string(), e.what()));
   }
   std::string name = path.filename().string();
   for (const char* ext : {".gz", ".txt", ".log"})
     if (name.size() > std::strlen(ext) && name.ends_with(ext))
       name.resize(name.size() - std::strlen(ext));
-  return dataset_from_robot_log(log, vehicle, name);
+  SlamDataset d = dataset_from_robot_log(log, vehicle, name);
+  d.vehicle_assumed = assumed;
+  return d;
 }
 
 void write_slam_log(const SlamDataset& d, const std::filesystem::path& path) {

@@ -115,6 +115,62 @@ TEST(Cli, SlamVehicleNanExits1NamingTheLine) {
   EXPECT_NE(r.err.find(log + ":1: vehicle comment: field 'a'"), std::string::npos) << r.err;
 }
 
+// The `vehicle` record is range-checked like the `# vehicle` comment, in mcl and slam alike.
+TEST(Cli, VehicleRecordOutOfRangeExits1NamingKeyValueAndLine) {
+  TempDir dir("vehicle_record_range");
+  for (const std::string kv : {"a=1e300", "a=150", "L=1e300", "dt=100"}) {
+    const auto log = write_log(dir, "vehicle ute " + kv + "\n" + small_log(true));
+    const std::string key = kv.substr(0, kv.find('=')), value = kv.substr(kv.find('=') + 1);
+    for (const char* cmd : {"mcl --runs 1 --quiet --data ", "slam --datasets 1 --quiet --data "}) {
+      const auto r = run_cli(cmd + log);
+      EXPECT_EQ(r.code, 1) << cmd << kv << "\n" << r.err;
+      EXPECT_NE(r.err.find(log + ":1: field '" + key + "': expected "), std::string::npos)
+          << cmd << kv << "\n"
+          << r.err;
+      EXPECT_NE(r.err.find(", got '" + value + "'"), std::string::npos) << cmd << r.err;
+    }
+  }
+}
+
+TEST(Cli, VehicleRecordWithAnUnknownKeyExits1InMclAndSlam) {
+  TempDir dir("vehicle_record_key");
+  const auto log = write_log(dir, "vehicle unicycle dt=0.025 foo=3\n" + small_log(true));
+  for (const char* cmd : {"mcl --runs 1 --quiet --data ", "slam --datasets 1 --quiet --data "}) {
+    const auto r = run_cli(cmd + log);
+    EXPECT_EQ(r.code, 1) << cmd << r.err;
+    EXPECT_NE(r.err.find("vehicle 'unicycle': expected parameters among dt, got 'foo'"),
+              std::string::npos)
+        << cmd << r.err;
+  }
+}
+
+// A log without a `vehicle` record runs as the Car Park's Ute: said on stderr even with --json,
+// and recorded in the JSON; a log that declares its vehicle says nothing of the kind.
+TEST(Cli, LogWithoutAVehicleRecordSaysTheUteIsAssumed) {
+  TempDir dir("vehicle_assumed");
+  const auto bare = write_log(dir, small_log(true));
+  for (const char* cmd :
+       {"mcl --runs 1 --json --data ", "slam --method ekf --datasets 1 --json --data "}) {
+    const auto r = run_cli(cmd + bare);
+    ASSERT_EQ(r.code, 0) << cmd << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["vehicle_assumed"], true) << cmd << r.out;
+    EXPECT_NE(r.err.find("warning: the log '"), std::string::npos) << cmd << r.err;
+    EXPECT_NE(r.err.find("declares no vehicle (no 'vehicle' record): it runs as the ute with "
+                         "dt=0.025 L=2.83 H=0.76 a=3.78 b=0.5, the Car Park's car"),
+              std::string::npos)
+        << cmd << r.err;
+  }
+  const auto declared =
+      write_log(dir, "vehicle ute dt=0.025 L=2.83 H=0.76 a=3.78 b=0.5\n" + small_log(true));
+  for (const char* cmd :
+       {"mcl --runs 1 --json --data ", "slam --method ekf --datasets 1 --json --data "}) {
+    const auto r = run_cli(cmd + declared);
+    ASSERT_EQ(r.code, 0) << cmd << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["vehicle_assumed"], false) << cmd << r.out;
+    EXPECT_EQ(r.err.find("declares no vehicle"), std::string::npos) << cmd << r.err;
+  }
+}
+
 TEST(Cli, SlamRunThatScoresNothingExits1UnlessAllowed) {
   TempDir dir("slam_unscored");
   const auto log = write_log(dir, small_log(false));
@@ -130,8 +186,10 @@ TEST(Cli, SlamRunThatScoresNothingExits1UnlessAllowed) {
   const auto allowed = run_cli(args + log + " --allow-empty");
   EXPECT_EQ(allowed.code, 0) << allowed.err;
   EXPECT_NE(allowed.err.find("allowed by --allow-empty"), std::string::npos) << allowed.err;
-  // The same log with truth is scored, and says nothing.
-  const auto scored = run_cli(args + write_log(dir, small_log(true)));
+  // The same log with truth (and its vehicle declared, else the assumed Ute is warned about) is
+  // scored, and says nothing.
+  const auto scored = run_cli(
+      args + write_log(dir, "vehicle ute dt=0.025 L=2.83 H=0.76 a=3.78 b=0.5\n" + small_log(true)));
   EXPECT_EQ(scored.code, 0) << scored.err;
   EXPECT_EQ(scored.err.find("warning"), std::string::npos) << scored.err;
 }

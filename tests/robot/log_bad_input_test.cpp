@@ -44,6 +44,37 @@ TEST(LogFormat, ControlsAllBeforeInitialIsAnErrorNamingTheLine) {
   EXPECT_EQ(runnable_error("initial 0 0 0 0 0 0 0\ncontrol 0.5 1 0\n"), "no error");
 }
 
+// The `vehicle` record's numbers were only checked to be finite: a=1e300 or dt=100 ran and made
+// every metric NaN or dropped every observation. They now have the `# vehicle` comment's ranges.
+TEST(LogFormat, VehicleRecordOutsideSensibleRangesIsAnErrorNamingKeyValueAndLine) {
+  const std::string body = "initial 0 0 0 0 0 0 0\ncontrol 0.025 1 0\n";
+  auto error = [&](const std::string& vehicle) {
+    try {
+      parse_bad_log(body + vehicle + "\n");
+    } catch (const ParseError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string ute = "vehicle ute dt=0.025 L=2.83 H=0.76 ";
+  EXPECT_EQ(error(ute + "a=1e300 b=0.5"),
+            "bad.log:3: field 'a': expected an offset in [-100, 100] m, got '1e300'");
+  EXPECT_EQ(error(ute + "a=150 b=0.5"),
+            "bad.log:3: field 'a': expected an offset in [-100, 100] m, got '150'");
+  EXPECT_EQ(error("vehicle ute L=1e300"),
+            "bad.log:3: field 'L': expected a wheelbase in (0, 100] m, got '1e300'");
+  EXPECT_EQ(error("vehicle ute dt=100"),
+            "bad.log:3: field 'dt': expected a time step in (0, 60] s, got '100'");
+  EXPECT_EQ(error("vehicle unicycle dt=0"),
+            "bad.log:3: field 'dt': expected a time step in (0, 60] s, got '0'");
+  EXPECT_EQ(error("vehicle ute b=-100.5"),
+            "bad.log:3: field 'b': expected an offset in [-100, 100] m, got '-100.5'");
+  // The bounds themselves are sensible.
+  EXPECT_EQ(error("vehicle ute dt=60 L=100 H=-100 a=100 b=0"), "no error");
+  EXPECT_EQ(vehicle_parameter_out_of_range("dt", 0.025), "");
+  EXPECT_EQ(vehicle_parameter_out_of_range("speed", 1e300), "");  // not a key with a range
+}
+
 TEST(LogFormat, ScanBeforeTheFirstStepIsSkipped) {
   const RobotLog log =
       parse_bad_log("initial 0 0 0 0 0 0 0\nscan 0.1 0\ncontrol 1 1 0\nscan 1 0\n");

@@ -68,6 +68,40 @@ TEST_F(SlamBadInput, VehicleCommentWithHugeTimeStepIsAnErrorNamingTheLine) {
   EXPECT_EQ(log_error("# vehicle dt=0.05 L=2.83 H=0.76 a=0.95 b=0.5\n" + kBody), "no error");
 }
 
+// The record and the older comment share one range check: the same value, the same expectation.
+TEST_F(SlamBadInput, VehicleRecordHasTheRangesOfTheComment) {
+  for (const std::string kv : {"a=150", "L=1e300", "dt=100", "H=-200"}) {
+    SCOPED_TRACE(kv);
+    const std::string comment = log_error("# vehicle " + kv + "\n" + kBody);
+    const std::string record = log_error("vehicle ute " + kv + "\n" + kBody);
+    const std::string tail = comment.substr(comment.find(": field '"));
+    EXPECT_EQ(comment, at(1) + ": vehicle comment" + tail);
+    EXPECT_EQ(record, at(1) + tail);
+  }
+}
+
+// `mcl` refused a key its model does not have; `slam` ignored it for every model but the Ute.
+TEST_F(SlamBadInput, VehicleRecordWithAKeyTheModelLacksIsRefused) {
+  const auto path = write("run.log", "vehicle unicycle dt=0.1 L=2\n" + kBody);
+  try {
+    read_slam_log(path);
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              path.string() + ": vehicle 'unicycle': expected parameters among dt, got 'L'");
+  }
+  EXPECT_EQ(read_slam_log(write("run.log", "vehicle unicycle dt=0.1\n" + kBody)).vehicle.dt, 0.1);
+}
+
+// Which logs leave the vehicle to be assumed: neither a record nor the older comment.
+TEST_F(SlamBadInput, VehicleIsAssumedOnlyWhenTheLogDeclaresNone) {
+  EXPECT_TRUE(read_slam_log(write("run.log", kBody)).vehicle_assumed);
+  EXPECT_FALSE(read_slam_log(write("run.log", "# vehicle dt=0.05\n" + kBody)).vehicle_assumed);
+  EXPECT_FALSE(read_slam_log(write("run.log", "vehicle ute dt=0.05\n" + kBody)).vehicle_assumed);
+  EXPECT_FALSE(
+      read_slam_log(write("run.log", "vehicle unicycle dt=0.05\n" + kBody)).vehicle_assumed);
+}
+
 TEST_F(SlamBadInput, LogWithNoControlsIsAnErrorNamingTheLine) {
   EXPECT_EQ(log_error("initial 1 0 0 0 0 0 0\nscan 0.5 0\n"),
             at(1) +

@@ -27,6 +27,7 @@
 #include <iosfwd>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -78,6 +79,14 @@ struct VehicleDeclaration {
     return std::nullopt;
   }
 };
+
+/// The physically sensible range of a vehicle parameter, the same for the `vehicle` record and
+/// the older `# vehicle` comment: dt in (0, 60] s, L in (0, 100] m, H, a, b in [-100, 100] m.
+/// An empty string when `value` lies in it (or `key` is none of these), otherwise what was
+/// expected, e.g. "a time step in (0, 60] s", for the reader's message, which adds the key, the
+/// value and the line. Without it a=1e300 or dt=100 ran and turned every metric into NaN or
+/// dropped every observation, silently.
+std::string vehicle_parameter_out_of_range(std::string_view key, double value);
 
 /// The declarations of the shipped models: "ute" (dt, L, H, a, b) and "unicycle" (dt).
 VehicleDeclaration declare_vehicle(const UteParams& p);

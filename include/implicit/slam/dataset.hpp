@@ -38,8 +38,11 @@ struct Observation {
 
 struct SlamDataset {
   std::string name;
-  robot::UteParams vehicle;               ///< geometry and dt (noise settings belong to the filter)
-  std::string vehicle_model;              ///< the model a log declares ("ute", ...); "" if none
+  robot::UteParams vehicle;   ///< geometry and dt (noise settings belong to the filter)
+  std::string vehicle_model;  ///< the model a log declares ("ute", ...); "" if none
+  /// read_slam_log: the log declares no vehicle, neither by record nor by `# vehicle` comment, so
+  /// the Car Park's Ute was assumed (the CLI says so on stderr and in its JSON).
+  bool vehicle_assumed = false;
   std::vector<double> step_dt;            ///< step_dt[n-1] = length of step n [s]; empty: dt
   Pose initial_pose = Pose::Zero();       ///< known initial pose (row 0)
   std::vector<Control> controls;          ///< controls[n-1] = u_n, n = 1..N
@@ -154,9 +157,10 @@ SlamDataset dataset_from_robot_log(const robot::RobotLog& log, const robot::UteP
 SlamDataset dataset_from_robot_log(const robot::RobotLog& log, double dt, const std::string& name);
 
 /// Reads a robot log (plain or gzip). The vehicle comes from its `vehicle` record (docs/formats.md;
-/// for another model than the Ute, `vehicle.dt` holds its declared dt); logs without one may carry
-/// the older comment line
-/// "# vehicle dt=0.025 L=2.83 H=0.76 a=0.95 b=0.5" (Car Park values when absent too).
+/// for another model than the Ute, `vehicle.dt` holds its declared dt; a key the model does not
+/// have is an InvalidArgument naming the file); logs without one may carry the older comment line
+/// "# vehicle dt=0.025 L=2.83 H=0.76 a=0.95 b=0.5" (Car Park values when absent too, and
+/// `vehicle_assumed` set).
 SlamDataset read_slam_log(const std::filesystem::path& path);
 
 /// Writes a data set as a robot log with its `vehicle` record (steps at the times step_dt gives,
