@@ -6,6 +6,7 @@
 
 #include "implicit/core/jet.hpp"
 #include "implicit/core/rng.hpp"
+#include "implicit/robot/ute_model.hpp"
 #include "implicit/slam/proposals.hpp"
 
 namespace implicit::slam {
