@@ -75,7 +75,7 @@ TEST(LikelihoodField, NearestCellIsTheCellValueAnywhereInTheCell) {
   const PreparedScan z = model.prepare(s);
   Rng rng({7, 0, 0, 0});
   for (int k = 0; k < 50; ++k) {
-    const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();  // in this order
+    const double uh = rng.uniform(), uy = rng.uniform(), ux = rng.uniform();  // in this order
     const Pose x(0.5 + 2.0 * ux, 0.8 + 2.0 * uy, uh - 0.5);
     const double c = std::cos(x(2)), sn = std::sin(x(2));
     double expected = 0.0;
