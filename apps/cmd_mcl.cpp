@@ -1,4 +1,6 @@
 // `implicit mcl`: Monte Carlo localization on the Car Park data (paper §4.1, Table 5, Figure 6).
+#include <cmath>
+
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
@@ -176,6 +178,7 @@ void setup_mcl(CLI::App& sub) {
               cmd->map);
       cmd->settings.map = cmd->map;
     }
+    cmd->settings.allow_empty = cmd->allow_empty;
     const auto r = run_mcl(cmd->settings, cmd->ctx);
     const auto check = [&] {
       require_scored(r, "mcl", {"error_percent_mean", "rmse_m"}, {}, cmd->allow_empty);
@@ -187,12 +190,13 @@ void setup_mcl(CLI::App& sub) {
     }
     if (r.contains("global_success_rate") || r.contains("kidnap_recovery_rate")) {
       const bool kidnap = r.contains("kidnap_recovery_rate");
+      const double rate = r[kidnap ? "kidnap_recovery_rate" : "global_success_rate"].get<double>();
       fmt::print(
-          "MCL {} {} M = {}, {} runs: {} rate {:.2f}, median time {:.1f} s, particles {:.0f} "
+          "MCL {} {} M = {}, {} runs: {} rate {}, median time {:.1f} s, particles {:.0f} "
           "(peak {:.0f}), {:.4f} ms per step\n",
           kidnap ? "kidnapping" : "global start", r["method"].get<std::string>(),
           r["particles"].get<int>(), r["runs"].get<int>(), kidnap ? "recovery" : "success",
-          r[kidnap ? "kidnap_recovery_rate" : "global_success_rate"].get<double>(),
+          std::isfinite(rate) ? fmt::format("{:.2f}", rate) : "n/a (nothing was tested)",
           r[kidnap ? "recovery_time_s_median" : "time_to_converge_s_median"].get<double>(),
           r["particles_mean"].get<double>(), r["particles_peak"].get<double>(),
           r["cpu_ms_per_step"].get<double>());

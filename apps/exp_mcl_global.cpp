@@ -70,6 +70,34 @@ void write_errors(const std::filesystem::path& file, const filter::LocalizationP
   out.commit();
 }
 
+/// Why the test of these settings cannot happen on `problem` (the log cut to --duration), or ""
+/// when it can: a kidnapping at or after the log's end, nothing left after its gap, or no step
+/// with ground truth to score. A rate of 0 for a test that never happened would read as a
+/// filter that never recovers.
+std::string empty_test(const MclSettings& s, const filter::LocalizationProblem& problem,
+                       double t0) {
+  const auto& steps = problem.schedule.steps;
+  const double end = steps.back().time - t0;
+  const bool kidnap = s.kidnap_at >= 0;
+  if (kidnap && s.kidnap_at >= end)
+    return fmt::format(
+        "mcl --kidnap-at {}: expected a time before the log's end ({:.3f} s after its first "
+        "control), got one after it: the kidnapping never happens",
+        s.kidnap_at, end);
+  const double from = kidnap ? s.kidnap_at + s.kidnap_skip : 0.0;
+  if (kidnap && from >= end)
+    return fmt::format(
+        "mcl --kidnap-at {} --kidnap-skip {}: expected steps after the gap, got the log's end "
+        "({:.3f} s after its first control) inside it: nothing is left to recover on",
+        s.kidnap_at, s.kidnap_skip, end);
+  for (std::size_t k = 0; k < steps.size(); ++k)
+    if (steps[k].time - t0 >= from && problem.truth.position[k].allFinite()) return "";
+  return fmt::format(
+      "mcl {}: expected ground truth ('truth' records) {} to score the runs, got none",
+      kidnap ? "--kidnap-at" : "--init global",
+      kidnap ? "after the kidnapping's gap" : "in the log");
+}
+
 template <typename Motion>
 nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Motion& model,
                           const robot::RangeBearingSensor& sensor,
@@ -83,6 +111,12 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
       s.duration > 0
           ? filter::without_steps(full, t0 + s.duration, std::numeric_limits<double>::infinity())
           : full;
+  const std::string empty = empty_test(s, cut, t0);
+  if (!empty.empty()) {
+    require(s.allow_empty,
+            "{}; --allow-empty runs it anyway (exit 0, the JSON's \"empty\" says why)", empty);
+    fmt::print(stderr, "implicit mcl: warning: {} (allowed by --allow-empty)\n", empty);
+  }
   // Kidnapping: the steps of [T, T + D) are never seen (filter/localization.hpp, without_steps).
   const filter::LocalizationProblem problem =
       kidnap ? filter::without_steps(cut, t0 + s.kidnap_at, t0 + s.kidnap_at + s.kidnap_skip) : cut;
@@ -187,6 +221,10 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
       "the gap) to the end; converged: the error stays below 1 m for 5 s";
   const std::string prefix = kidnap ? "kidnap_recovery" : "global_success";
   j[prefix + "_rate"] = mean_of(success);
+  if (!empty.empty()) {
+    j["empty"] = empty;  // the test did not happen: no rate (NaN, null in the JSON)
+    j[prefix + "_rate"] = std::numeric_limits<double>::quiet_NaN();
+  }
   j[kidnap ? "recovery_time_s_median" : "time_to_converge_s_median"] = median_of_finite(converge);
   j[kidnap ? "recovery_time_s_runs" : "time_to_converge_s_runs"] = converge;
   j["success_runs"] = success;

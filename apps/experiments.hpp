@@ -85,6 +85,10 @@ struct MclSettings {
   int max_particles = 5000;
   double cover_spacing = 2.0;  ///< [m] of the multi-start's grid
   int cover_headings = 8;
+  /// --allow-empty: a global or kidnapping test that cannot happen (a kidnapping after the log's
+  /// end, no ground truth to score) runs anyway and says so in the JSON ("empty") instead of
+  /// being an error.
+  bool allow_empty = false;
 };
 /// Keys: method, particles, runs, config, error_percent_mean/std/median, rmse_m,
 /// heading_rmse_rad, ess_mean, cpu_ms_per_step, detections_used, detections_dropped, lost_runs,

@@ -92,9 +92,13 @@ LocalizationMetrics localization_metrics(const LocalizationRun& run, const robot
       ++nh;
     }
   }
-  require(n > 0, "localization metrics: expected steps with ground truth, got none");
-  m.error_percent = 100.0 * std::sqrt(num) / std::sqrt(den);
-  m.rmse = std::sqrt(num / n);
+  if (n == 0) {
+    // Nothing to compare with (a log without truth): NaN (null in JSON), not an error of 0.
+    m.error_percent = m.rmse = m.max_error = std::numeric_limits<double>::quiet_NaN();
+  } else {
+    m.error_percent = 100.0 * std::sqrt(num) / std::sqrt(den);
+    m.rmse = std::sqrt(num / n);
+  }
   if (nh > 0) m.heading_rmse = std::sqrt(hsum / nh);
   if (updates > 0) {
     m.ess_fraction = ess / updates;

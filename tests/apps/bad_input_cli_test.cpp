@@ -194,6 +194,63 @@ TEST(Cli, SlamRunThatScoresNothingExits1UnlessAllowed) {
   EXPECT_EQ(scored.err.find("warning"), std::string::npos) << scored.err;
 }
 
+// mcl on a log without truth scores nothing: exit 1 with the metrics null, exit 0 with
+// --allow-empty (as docs/cli.md says); every run used to fail instead.
+TEST(Cli, MclRunThatScoresNothingExits1UnlessAllowed) {
+  TempDir dir("mcl_unscored");
+  const auto log = write_log(dir, small_log(false));
+  const std::string args = "mcl --runs 1 -M 20 --json --data " + log;
+  const auto r = run_cli(args);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("scored nothing: error_percent_mean is not a finite number"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(r.out)["error_percent_mean"].is_null()) << r.out;
+  const auto allowed = run_cli(args + " --allow-empty");
+  EXPECT_EQ(allowed.code, 0) << allowed.err;
+  EXPECT_TRUE(nlohmann::json::parse(allowed.out)["rmse_m"].is_null()) << allowed.out;
+  EXPECT_NE(allowed.err.find("allowed by --allow-empty"), std::string::npos) << allowed.err;
+}
+
+// A kidnapping that never happens (or leaves nothing after its gap), and a global start on a log
+// without truth, reported a rate of 0 for a test that was never made: now an error naming the
+// flag and why, unless --allow-empty, with which the JSON says what was empty.
+TEST(Cli, MclGlobalOrKidnapTestThatCannotHappenExits1UnlessAllowed) {
+  TempDir dir("mcl_empty_tests");
+  const auto sim =
+      run_cli("simulate --model ute --seed 3 --quiet --out " + (dir.path() / "sim.log").string());
+  ASSERT_EQ(sim.code, 0) << sim.err;
+  std::ifstream in(dir.path() / "sim.log");
+  std::string text, line;
+  while (std::getline(in, line))
+    if (!line.starts_with("truth ")) text += line + "\n";
+  const auto no_truth = write_log(dir, text);
+  struct Case {
+    std::string args, message, rate;
+  };
+  const std::vector<Case> cases = {
+      {"--duration 30 --kidnap-at 100", "mcl --kidnap-at 100: expected a time before the log's end",
+       "kidnap_recovery_rate"},
+      {"--duration 30 --kidnap-at 20 --kidnap-skip 20",
+       "mcl --kidnap-at 20 --kidnap-skip 20: expected steps after the gap", "kidnap_recovery_rate"},
+      {"--duration 20 --init global --data " + no_truth,
+       "mcl --init global: expected ground truth ('truth' records) in the log to score the runs, "
+       "got none",
+       "global_success_rate"}};
+  for (const auto& c : cases) {
+    const std::string args = "mcl --runs 1 -M 50 --json " + c.args;
+    const auto r = run_cli(args);
+    EXPECT_EQ(r.code, 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find("--allow-empty runs it anyway"), std::string::npos) << r.err;
+    const auto allowed = run_cli(args + " --allow-empty");
+    ASSERT_EQ(allowed.code, 0) << args << "\n" << allowed.err;
+    const auto j = nlohmann::json::parse(allowed.out);
+    EXPECT_NE(j["empty"].get<std::string>().find(c.message), std::string::npos) << allowed.out;
+    EXPECT_TRUE(j[c.rate].is_null()) << allowed.out;
+  }
+}
+
 TEST(Cli, SlamOutIntoUnwritableFolderExits1) {
   // procfs refuses new files even to root, for whom a chmod 555 folder is still writable.
   const auto r = run_cli("slam --method ekf --datasets 1 --quiet --out /proc/self");

@@ -711,5 +711,27 @@ TEST(ReferenceTrack, GpsAidedReferenceIsCloserToTruthThanGps) {
   }
 }
 
+// A log without truth scores nothing: the position metrics are NaN (null in the CLI's JSON, which
+// --allow-empty accepts); they used to be an exception that failed every run.
+TEST(LocalizationMetrics, WithoutTruthThePositionMetricsAreNaN) {
+  LocalizationRun run;
+  run.steps.resize(3);
+  run.steps[1].updated = true;
+  run.steps[1].ess = 5.0;
+  run.steps[1].detections_used = 2.0;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  robot::TruthTrack truth;
+  truth.position.assign(3, Vec<2>(nan, nan));
+  truth.heading.assign(3, nan);
+  const LocalizationMetrics m = localization_metrics(run, truth, 10);
+  EXPECT_TRUE(std::isnan(m.error_percent));
+  EXPECT_TRUE(std::isnan(m.rmse));
+  EXPECT_TRUE(std::isnan(m.max_error));
+  EXPECT_EQ(m.ess_fraction, 0.5);  // what does not need truth is still there
+  EXPECT_EQ(m.detections_used, 2.0);
+  truth.position[2] = Vec<2>(3.0, 4.0);  // one step with truth: scored
+  EXPECT_EQ(localization_metrics(run, truth, 10).rmse, 5.0);
+}
+
 }  // namespace
 }  // namespace implicit::filter

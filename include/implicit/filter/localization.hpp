@@ -151,7 +151,8 @@ struct LocalizationMetrics {
   int failures = 0;
 };
 
-/// Metrics of one run against the truth; `particles` is M (for ESS/M).
+/// Metrics of one run against the truth; `particles` is M (for ESS/M). Without any step with
+/// truth the position metrics (error_percent, rmse, max_error) are NaN: nothing was scored.
 LocalizationMetrics localization_metrics(const LocalizationRun& run, const robot::TruthTrack& truth,
                                          std::size_t particles);
 
