@@ -1,8 +1,10 @@
 #pragma once
-// `implicit simulate --map`: a CARMEN laser log of a differential-drive robot touring a map's free
-// space, which `implicit mcl --sensor laser --map ... --data ...` reads back (docs/cli.md).
+// `implicit simulate --map`: a CARMEN laser log (or, --format robot-log, a robot log) of a
+// differential-drive robot touring a map's free space, which `implicit mcl --sensor laser --map
+// ... --data ...` reads back (docs/cli.md).
 
 #include <string>
+#include <vector>
 
 #include "context.hpp"
 
@@ -21,9 +23,11 @@ struct LaserSimulationCommand {
   double scan_period = 0.2;   ///< [s] between scans
   double clearance = 0.3;     ///< [m] kept from every cell that is not free
   int laps = 1;
-  int beams = 181;        ///< over 180 degrees, as CARMEN's readers take FLASER lines
-  double fov_deg = 180;   ///< beams outside +-fov/2 read "no return"
-  double range_max = 30;  ///< [m]
+  int beams = 181;                      ///< over 180 degrees, as CARMEN's readers take FLASER lines
+  double fov_deg = 180;                 ///< beams outside +-fov/2 read "no return"
+  double range_max = 30;                ///< [m]
+  std::string format = "carmen";        ///< --format: carmen or robot-log
+  std::vector<double> odometry_alphas;  ///< robot-log: the odometry noise; empty: 0.02 each
 };
 
 /// [m] the laser's range noise sd when --range-sd is not given (its 0 means the landmark sensor's

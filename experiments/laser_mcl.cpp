@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <limits>
 #include <memory>
 #include <numeric>
 
@@ -77,7 +78,7 @@ void follow(Filter& pf, const LaserDataset& d, const std::vector<Vec<3>>& odomet
 template <typename Proposal>
 Track run_one(const LaserMclSettings& s, const LaserDataset& d, const Model& model,
               Proposal proposal, std::uint64_t seed, std::size_t first, std::size_t last) {
-  const std::vector<Vec<3>> odometry = synthesise_odometry(d.reference, s.odometry_noise, seed);
+  const std::vector<Vec<3>> odometry = run_odometry(d, s.odometry_noise, seed);
   filter::FilterOptions o;
   o.particles = s.particles;
   o.seed = seed;
@@ -106,28 +107,36 @@ Track run_one(const LaserMclSettings& s, const LaserDataset& d, const Model& mod
 /// The run's scores from its track against the reference of updates [first, ...].
 LaserMclRun score(const LaserMclSettings& s, const LaserDataset& d, const Track& t,
                   std::uint64_t seed, std::size_t first) {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   LaserMclRun r;
   r.seed = seed;
+  r.final_error_m = nan;
   double sum_p = 0.0, sum_h = 0.0;
-  int converged_from = -1;
+  int headed = 0, converged_from = -1;
   for (std::size_t i = 0; i < t.estimates.size(); ++i) {
     const robot::Pose& ref = d.reference[first + i];
+    // A robot log's update without truth (NaN) is not scored; one without heading scores the
+    // position only.
     const double e = (t.estimates[i].head<2>() - ref.head<2>()).norm();
+    if (s.keep_tracks) r.errors_m.push_back(e);
+    if (std::isnan(e)) continue;
     const double h = std::abs(wrap_angle(t.estimates[i](2) - ref(2)));
+    ++r.scored_updates;
     sum_p += e * e;
-    sum_h += h * h;
-    const bool good = e < s.global_success_radius && h < 0.3;
+    r.final_error_m = e;
+    if (!std::isnan(h)) {
+      ++headed;
+      sum_h += h * h;
+    }
+    const bool good = e < s.global_success_radius && !(h >= 0.3);
     if (!good)
       converged_from = -1;
     else if (converged_from < 0)
       converged_from = static_cast<int>(i);
-    if (s.keep_tracks) r.errors_m.push_back(e);
   }
-  const double n = static_cast<double>(t.estimates.size());
-  r.position_rmse_m = std::sqrt(sum_p / n);
-  r.heading_rmse_rad = std::sqrt(sum_h / n);
-  const robot::Pose& final_ref = d.reference[first + t.estimates.size() - 1];
-  r.final_error_m = (t.estimates.back().head<2>() - final_ref.head<2>()).norm();
+  r.position_rmse_m =
+      r.scored_updates > 0 ? std::sqrt(sum_p / static_cast<double>(r.scored_updates)) : nan;
+  r.heading_rmse_rad = headed > 0 ? std::sqrt(sum_h / static_cast<double>(headed)) : nan;
   r.lost = r.final_error_m > s.lost_threshold;
   r.updates_to_converge = converged_from;
   r.global_success = converged_from >= 0 && converged_from <= s.global_updates;
@@ -148,6 +157,9 @@ MeanSe mean_se(const std::vector<LaserMclRun>& runs, double LaserMclRun::*field)
   std::vector<double> v;
   for (const LaserMclRun& r : runs) v.push_back(r.*field);
   MeanSe m;
+  // A run that scored nothing (no truth) leaves the summary undefined, not a mean of the rest.
+  if (std::any_of(v.begin(), v.end(), [](double x) { return std::isnan(x); }))
+    return {std::nan(""), std::nan(""), std::nan("")};
   const double n = static_cast<double>(v.size());
   m.mean = std::accumulate(v.begin(), v.end(), 0.0) / n;
   double q = 0.0;
@@ -165,6 +177,11 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
   settings.validate();
   require(d.scans.size() >= 2 && d.scans.size() == d.reference.size(),
           "laser MCL: expected a dataset with at least 2 updates");
+  require(settings.start == StartKind::kGlobal || d.reference.front().allFinite(),
+          "laser MCL on {}: a known start begins at the reference pose of the first update, and "
+          "the log has no truth (with heading) at its time {} s; add truth records, or start "
+          "anywhere (--init global)",
+          d.name, d.scans.front().time);
   const auto wall0 = std::chrono::steady_clock::now();
   auto field = std::make_shared<const robot::DistanceField>(
       d.map, settings.laser.laser_likelihood_max_dist);
@@ -178,6 +195,7 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
   result.map_height = d.map.height();
   result.map_resolution = d.map.resolution();
   result.map_built = d.map_built;
+  result.odometry_recorded = d.odometry_recorded();
   const std::size_t n = d.scans.size();
   for (int run = 0; run < settings.runs; ++run) {
     const std::uint64_t seed = settings.seed + static_cast<std::uint64_t>(run);
@@ -208,6 +226,7 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
   result.ess_fraction = mean_se(result.runs, &LaserMclRun::ess_fraction_mean);
   for (const LaserMclRun& r : result.runs) {
     result.lost_runs += r.lost ? 1 : 0;
+    result.scored_updates += static_cast<std::size_t>(r.scored_updates);
     result.global_success_rate += r.global_success ? 1.0 / settings.runs : 0.0;
   }
   result.seconds =
@@ -246,7 +265,8 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
     return nlohmann::json{{"alpha1", a.alpha1}, {"alpha2", a.alpha2}, {"alpha3", a.alpha3},
                           {"alpha4", a.alpha4}};
   };
-  j["odometry_noise"] = alphas(s.odometry_noise);
+  j["odometry"] = r.odometry_recorded ? "recorded" : "synthesised";
+  j["odometry_noise"] = r.odometry_recorded ? nlohmann::json(nullptr) : alphas(s.odometry_noise);
   j["filter_alphas"] = alphas(s.filter_alphas);
   j["laser"] = {{"z_hit", s.laser.z_hit},
                 {"z_rand", s.laser.z_rand},
@@ -263,6 +283,7 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
       r.cpu_us_per_update.mean / static_cast<double>(std::max<std::size_t>(s.particles, 1));
   j["ess_fraction"] = to_json(r.ess_fraction);
   j["lost_runs"] = r.lost_runs;
+  j["scored_updates"] = r.scored_updates;
   if (s.start == StartKind::kGlobal) {
     j["global_success_rate"] = r.global_success_rate;
     j["global_updates"] = s.global_updates;
@@ -275,6 +296,7 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
                         {"position_rmse_m", run.position_rmse_m},
                         {"heading_rmse_rad", run.heading_rmse_rad},
                         {"final_error_m", run.final_error_m},
+                        {"scored_updates", run.scored_updates},
                         {"lost", run.lost},
                         {"ess_fraction_mean", run.ess_fraction_mean},
                         {"particles_mean", run.particles_mean},

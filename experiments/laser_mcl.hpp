@@ -10,6 +10,10 @@
 //  4. the filter sees the scans, the map and the odometry, never the reference poses; its estimate
 //     is scored against them (position and heading RMSE, lost runs, ESS, particles, CPU).
 //
+// A robot log (log_format.hpp) with `laser` and `odometry` records is run on its recorded odometry
+// instead (updates picked on it), its map, and its truth records as the reference (updates
+// without truth are not scored; without any, the metrics are NaN).
+//
 //   LaserMclSettings s;
 //   s.data = "data/carmen/intel-corrected.log.gz";
 //   s.proposal = ProposalKind::kImplicit;
@@ -59,11 +63,21 @@ struct LaserDataset {
   robot::OccupancyGrid map;
   std::size_t scans_in_log = 0;
   bool map_built = false;  ///< built from the reference poses (not read from a file)
+  /// The robot's recorded odometry pose at each update (a robot log's `odometry` records,
+  /// interpolated at the scan's time); empty when the log records none (CARMEN logs: the
+  /// odometry is synthesised from the reference, per run). A robot log's reference is its truth,
+  /// NaN at updates it does not cover (those are not scored).
+  std::vector<robot::Pose> odometry;
+  bool odometry_recorded() const { return !odometry.empty(); }
 };
 
 struct LaserDataOptions {
-  std::filesystem::path data;  ///< a CARMEN log (.log or .log.gz)
-  std::filesystem::path map;   ///< a map_server YAML; empty: built from the reference poses
+  /// A CARMEN log or a robot log (log_format.hpp) with `laser` and `odometry` records; plain or
+  /// gzip, the format told from the content (robot::is_robot_log).
+  std::filesystem::path data;
+  /// A map_server YAML; empty: a robot log's `map` record, or built from a CARMEN log's reference
+  /// poses.
+  std::filesystem::path map;
   double map_resolution = 0.05;      ///< [m] of the built map
   double map_max_range = 40.0;       ///< [m] beams longer than this only clear space in the built map
   double update_min_d = 0.25;        ///< [m] nav2's update_min_d
@@ -78,6 +92,11 @@ LaserDataset load_laser_dataset(const LaserDataOptions& options);
 /// pose k), each perturbed by the alpha noise from the stream (seed, k, purpose::kData).
 std::vector<Vec<3>> synthesise_odometry(const std::vector<robot::Pose>& reference,
                                         const robot::OdometryAlphas& alphas, std::uint64_t seed);
+/// The filter's controls of one run, u_k from update k-1 to update k (u_0 = 0): the increments of
+/// the recorded odometry (heading change wrapped) when the dataset has it, else
+/// synthesise_odometry(reference, noise, seed).
+std::vector<Vec<3>> run_odometry(const LaserDataset& d, const robot::OdometryAlphas& noise,
+                                 std::uint64_t seed);
 
 struct LaserMclSettings {
   LaserDataOptions data;
@@ -109,7 +128,8 @@ struct LaserMclRun {
   std::uint64_t seed = 0;
   double position_rmse_m = 0.0;   ///< over all updates
   double heading_rmse_rad = 0.0;
-  double final_error_m = 0.0;
+  double final_error_m = 0.0;  ///< at the last scored update
+  int scored_updates = 0;      ///< updates with a reference (truth); the metrics are NaN if 0
   bool lost = false;
   bool global_success = false;    ///< global start only
   int updates_to_converge = -1;   ///< global start: first update from which the error stays small
@@ -134,6 +154,8 @@ struct LaserMclResult {
   int map_width = 0, map_height = 0;
   double map_resolution = 0.0;
   bool map_built = false;
+  bool odometry_recorded = false;  ///< the log's odometry (else synthesised)
+  std::size_t scored_updates = 0;  ///< over all runs
   std::vector<LaserMclRun> runs;
   MeanSe position_rmse_m, heading_rmse_rad, cpu_us_per_update, ess_fraction;
   int lost_runs = 0;

@@ -5,7 +5,9 @@
 //    another exception, a crash, a sanitizer report, a hang);
 //  * an accepted log round-trips: write_robot_log then parse_robot_log gives the same log, bit for
 //    bit (17 significant digits);
-//  * the step schedule and truth interpolation of `implicit mcl/slam --data` run on it.
+//  * the step schedule and truth interpolation of `implicit mcl/slam --data` run on it, and the
+//    odometry and truth interpolation of `implicit mcl --sensor laser --data` at its scans; every
+//    `laser` record passes LaserScan::validate, and a written log is told from a CARMEN log.
 // A gzip-compressed input (magic bytes 1f 8b) goes through read_robot_log, as a .gz file would.
 
 #include <cstdint>
@@ -13,6 +15,7 @@
 #include <cstdlib>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "implicit/core/error.hpp"
 #include "implicit/robot/log_format.hpp"
@@ -30,6 +33,30 @@ using namespace implicit::robot;
 template <typename A, typename B>
 bool same_vector(const A& a, const B& b) {
   return a.size() == b.size() && (a.array() == b.array()).all();
+}
+
+// The records of laser runs: map, laser_mount, odometry, laser (ranges may be +inf).
+void require_same_laser_run(const RobotLog& a, const RobotLog& b) {
+  if (a.map.has_value() != b.map.has_value() || (a.map && a.map->file != b.map->file))
+    fail("`map`");
+  if (a.laser_mount.has_value() != b.laser_mount.has_value() ||
+      (a.laser_mount &&
+       (a.laser_mount->x != b.laser_mount->x || a.laser_mount->y != b.laser_mount->y ||
+        a.laser_mount->yaw != b.laser_mount->yaw)))
+    fail("`laser_mount`");
+  if (a.odometry.size() != b.odometry.size()) fail("the odometry count");
+  for (std::size_t k = 0; k < a.odometry.size(); ++k)
+    if (a.odometry[k].time != b.odometry[k].time ||
+        !same_vector(a.odometry[k].pose, b.odometry[k].pose))
+      fail("an odometry record");
+  if (a.laser_scans.size() != b.laser_scans.size()) fail("the laser count");
+  for (std::size_t k = 0; k < a.laser_scans.size(); ++k) {
+    const LaserScan &sa = a.laser_scans[k], &sb = b.laser_scans[k];
+    if (sa.time != sb.time || sa.angle_min != sb.angle_min ||
+        sa.angle_increment != sb.angle_increment || sa.range_min != sb.range_min ||
+        sa.range_max != sb.range_max || sa.ranges != sb.ranges)
+      fail("a laser record");
+  }
 }
 
 void require_same(const RobotLog& a, const RobotLog& b) {
@@ -56,6 +83,7 @@ void require_same(const RobotLog& a, const RobotLog& b) {
           !same_vector(sa.observations[j].z, sb.observations[j].z))
         fail("an observation");
   }
+  require_same_laser_run(a, b);
   if (a.truth.size() != b.truth.size()) fail("the truth count");
   for (std::size_t k = 0; k < a.truth.size(); ++k)
     if (a.truth[k].time != b.truth[k].time ||
@@ -92,5 +120,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const double start = log.initial ? log.initial->time : 0.0;
   const StepSchedule schedule = make_schedule(log, start, 0.0125);
   interpolate_truth(log, schedule);
+  // What `implicit mcl --sensor laser --data` does with it: odometry and truth at the scans.
+  std::vector<double> times;
+  for (const LaserScan& scan : log.laser_scans) {
+    scan.validate("fuzz");  // the reader's checks imply LaserScan's
+    times.push_back(scan.time);
+  }
+  interpolate_odometry(log, times);
+  interpolate_truth(log, times);
+  if (!log.laser_scans.empty() && !is_robot_log(out.str())) fail("the format detection");
   return 0;
 }

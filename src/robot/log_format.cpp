@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string_view>
@@ -13,7 +14,6 @@
 #include <fmt/format.h>
 
 #include "implicit/core/error.hpp"
-#include "implicit/core/weights.hpp"
 #include "implicit/robot/csv_table.hpp"
 
 namespace implicit::robot {
@@ -66,6 +66,17 @@ class LineParser {
     return static_cast<int>(v);
   }
   std::size_t line() const { return line_; }
+  const std::string& token(std::size_t k) const { return tokens_[k]; }
+  /// A laser reading: a finite number >= 0, or +infinity ("inf": no return).
+  double reading(std::size_t k, const std::string& field) const {
+    const std::string& s = tokens_[k];
+    char* end = nullptr;
+    const double v = std::strtod(s.c_str(), &end);
+    if (end != s.c_str() + s.size() || std::isnan(v) || !(v >= 0))
+      fail(fmt::format("field '{}': expected a range >= 0 or inf (no return), got '{}'", field,
+                       printable(s)));
+    return v;
+  }
 
   /// 'vehicle MODEL key=value ...': the model name, then numeric parameters with unique keys.
   VehicleDeclaration vehicle() const {
@@ -104,6 +115,83 @@ void require_later(const LineParser& p, double previous, double t, bool has_prev
   if (has_previous && !(t > previous))
     p.fail(fmt::format("field 'time': expected a time after {} (previous '{}' record), got {}",
                        previous, p.kind(), t));
+}
+
+constexpr int kMaxLaserBeams = 100000;  // as the CARMEN reader: more is not a planar laser
+
+/// 'laser t angle_min angle_increment range_min range_max n r_1 ... r_n' (see LaserScan).
+LaserScan laser_record(const LineParser& p) {
+  if (p.fields() < 7)
+    p.fail(fmt::format(
+        "record 'laser': expected 'laser t angle_min angle_increment range_min range_max n r_1 "
+        "... r_n' (at least 7 fields), got {} fields",
+        p.fields()));
+  LaserScan scan;
+  scan.time = p.number(1, "time");
+  scan.angle_min = p.number(2, "angle_min");
+  scan.angle_increment = p.number(3, "angle_increment");
+  if (scan.angle_increment == 0)
+    p.fail("field 'angle_increment': expected a non-zero beam spacing, got 0");
+  scan.range_min = p.number(4, "range_min");
+  if (!(scan.range_min >= 0))
+    p.fail(fmt::format("field 'range_min': expected >= 0, got {}", scan.range_min));
+  scan.range_max = p.number(5, "range_max");
+  if (!(scan.range_max > scan.range_min))
+    p.fail(fmt::format("field 'range_max': expected more than range_min = {}, got {}",
+                       scan.range_min, scan.range_max));
+  const int n = p.integer(6, "n");
+  if (n < 1 || n > kMaxLaserBeams)
+    p.fail(fmt::format("field 'n': expected 1 to {} beams, got {}", kMaxLaserBeams, n));
+  if (p.fields() != 6 + static_cast<std::size_t>(n))
+    p.fail(fmt::format("field 'n': expected {} readings after it, got {}", n, p.fields() - 6));
+  scan.ranges.resize(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < scan.ranges.size(); ++i)
+    scan.ranges[i] = p.reading(7 + i, fmt::format("r_{}", i + 1));
+  return scan;
+}
+
+/// The records of laser runs (map, laser_mount, odometry, laser); false for any other kind.
+bool laser_run_record(const LineParser& p, RobotLog& log) {
+  const std::string& kind = p.kind();
+  if (kind == "map") {
+    p.expect_fields(1, 1, "'map FILE' (a file name without blanks)");
+    if (log.map)
+      p.fail(fmt::format("expected one 'map' record, got a second one (the first: line {})",
+                         log.map->line));
+    log.map = MapReference{p.token(1), p.line()};
+  } else if (kind == "laser_mount") {
+    p.expect_fields(3, 3, "'laser_mount x y theta'");
+    if (log.laser_mount) p.fail("expected one 'laser_mount' record, got a second one");
+    log.laser_mount = LaserMount{p.number(1, "x"), p.number(2, "y"), p.number(3, "theta")};
+  } else if (kind == "odometry") {
+    p.expect_fields(4, 4, "'odometry t x y theta'");
+    const double t = p.number(1, "time");
+    require_later(p, log.odometry.empty() ? 0.0 : log.odometry.back().time, t,
+                  !log.odometry.empty());
+    log.odometry.push_back({t, Pose(p.number(2, "x"), p.number(3, "y"), p.number(4, "theta"))});
+  } else if (kind == "laser") {
+    LaserScan scan = laser_record(p);
+    require_later(p, log.laser_scans.empty() ? 0.0 : log.laser_scans.back().time, scan.time,
+                  !log.laser_scans.empty());
+    log.laser_scans.push_back(std::move(scan));
+  } else {
+    return false;
+  }
+  return true;
+}
+
+constexpr const char* kRecordKinds[] = {"vehicle",     "landmark", "initial", "control",
+                                        "scan",        "obs",      "truth",   "map",
+                                        "laser_mount", "odometry", "laser"};
+
+/// "vehicle|landmark|...", for messages.
+std::string record_kinds() {
+  std::string all;
+  for (const char* k : kRecordKinds) {
+    if (!all.empty()) all += '|';
+    all += k;
+  }
+  return all;
 }
 
 }  // namespace
@@ -245,10 +333,8 @@ RobotLog parse_robot_log(std::istream& in, const std::string& name) {
       r.position = Vec<2>(p.number(2, "x"), p.number(3, "y"));
       if (p.fields() == 4) r.heading = p.number(4, "heading");
       log.truth.push_back(r);
-    } else {
-      p.fail(fmt::format(
-          "expected a record kind vehicle|landmark|initial|control|scan|obs|truth, got '{}'",
-          printable(kind)));
+    } else if (!laser_run_record(p, log)) {
+      p.fail(fmt::format("expected a record kind {}, got '{}'", record_kinds(), printable(kind)));
     }
   }
   if (obs_remaining > 0)
@@ -263,11 +349,68 @@ RobotLog parse_robot_log(std::istream& in, const std::string& name) {
   return log;
 }
 
+std::filesystem::path map_file(const RobotLog& log) {
+  if (!log.map) return {};
+  const std::filesystem::path file(log.map->file);
+  return file.is_absolute() ? file : std::filesystem::path(log.source).parent_path() / file;
+}
+
+bool is_robot_log(std::string_view text) {
+  const std::string name;  // LineParser keeps a reference; no message is made here
+  std::size_t line_no = 0;
+  for (std::size_t start = 0; start < text.size();) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string_view::npos) end = text.size();
+    const LineParser p(name, ++line_no, text.substr(start, end - start));
+    if (!p.empty())
+      return std::find(std::begin(kRecordKinds), std::end(kRecordKinds), p.kind()) !=
+             std::end(kRecordKinds);
+    start = end + 1;
+  }
+  return false;
+}
+
 RobotLog read_robot_log(const std::filesystem::path& path) {
   const std::filesystem::path resolved = resolve_data_file(path);
   std::istringstream in(read_text_file(resolved));  // plain or gzip-compressed
-  return parse_robot_log(in, resolved.string());
+  RobotLog log = parse_robot_log(in, resolved.string());
+  // Checked here, where the folder is known: a missing map would otherwise surface later as a
+  // map reader's error that does not say which log named it.
+  if (log.map && !std::filesystem::is_regular_file(map_file(log)))
+    throw ParseError(fmt::format(
+        "{}:{}: field 'file': expected an existing map file (relative to the log's folder), got "
+        "'{}' (no file {})",
+        log.source, log.map->line, printable(log.map->file), map_file(log).string()));
+  return log;
 }
+
+namespace {
+
+void write_laser_run_records(std::ostream& out, const RobotLog& log) {
+  if (log.map) {
+    const std::string& f = log.map->file;
+    require(!f.empty() && f.find_first_of(" \t\r\n#") == std::string::npos,
+            "write_robot_log: expected a map file name without blanks or '#' (a 'map' record "
+            "holds one word), got '{}'",
+            printable(f));
+    out << "map " << f << "\n";
+  }
+  if (log.laser_mount)
+    out << fmt::format("laser_mount {:.17g} {:.17g} {:.17g}\n", log.laser_mount->x,
+                       log.laser_mount->y, log.laser_mount->yaw);
+  for (const OdometryRecord& o : log.odometry)
+    out << fmt::format("odometry {:.17g} {:.17g} {:.17g} {:.17g}\n", o.time, o.pose(0), o.pose(1),
+                       o.pose(2));
+  std::string line;
+  for (const LaserScan& s : log.laser_scans) {
+    line = fmt::format("laser {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {}", s.time, s.angle_min,
+                       s.angle_increment, s.range_min, s.range_max, s.ranges.size());
+    for (double r : s.ranges) fmt::format_to(std::back_inserter(line), " {:.17g}", r);
+    out << line << "\n";
+  }
+}
+
+}  // namespace
 
 void write_robot_log(std::ostream& out, const RobotLog& log) {
   out << "# implicit robot log v1 (docs/formats.md)\n";
@@ -297,6 +440,7 @@ void write_robot_log(std::ostream& out, const RobotLog& log) {
         out << fmt::format("obs {:.17g} {:.17g}\n", o.z(0), o.z(1));
     }
   }
+  write_laser_run_records(out, log);
   for (const TruthRecord& r : log.truth) {
     if (r.heading)
       out << fmt::format("truth {:.17g} {:.17g} {:.17g} {:.17g}\n", r.time, r.position(0),
@@ -384,37 +528,6 @@ std::vector<double> step_lengths(const RobotLog& log, const StepSchedule& schedu
     previous = step.time;
   }
   return lengths;
-}
-
-TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule, double max_gap) {
-  require(max_gap > 0.0, "interpolate_truth: expected a positive maximum gap, got {} s", max_gap);
-  TruthTrack track;
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  const auto& tr = log.truth;
-  for (const FilterStep& step : schedule.steps) {
-    const double t = step.time;
-    Vec<2> p(nan, nan);
-    double h = nan;
-    if (!tr.empty() && t >= tr.front().time && t <= tr.back().time) {
-      auto it = std::lower_bound(tr.begin(), tr.end(), t,
-                                 [](const TruthRecord& r, double v) { return r.time < v; });
-      if (it->time == t) {
-        p = it->position;
-        if (it->heading) h = *it->heading;
-      } else {
-        const TruthRecord& b = *it;
-        const TruthRecord& a = *(it - 1);
-        if (b.time - a.time <= max_gap) {
-          const double s = (t - a.time) / (b.time - a.time);
-          p = (1.0 - s) * a.position + s * b.position;
-          if (a.heading && b.heading) h = *a.heading + s * wrap_angle(*b.heading - *a.heading);
-        }
-      }
-    }
-    track.position.push_back(p);
-    track.heading.push_back(h);
-  }
-  return track;
 }
 
 }  // namespace implicit::robot

@@ -434,6 +434,8 @@ TEST(Cli, MapAndLaserSimulationRefuseBadInputNamingTheFlagOrFile) {
   const std::string d = dir.path().string();
   write_laser_map(dir.path() / "room.yaml", "room.pgm", 40 * 40);
   write_laser_map(dir.path() / "short.yaml", "short.pgm", 40 * 40 - 7);
+  std::filesystem::create_directories(dir.path() / "a b");
+  write_laser_map(dir.path() / "a b" / "room.yaml", "room.pgm", 40 * 40);
   std::string carmen;
   for (int k = 0; k < 3; ++k) {
     carmen += "FLASER 4";
@@ -479,6 +481,20 @@ TEST(Cli, MapAndLaserSimulationRefuseBadInputNamingTheFlagOrFile) {
       {sim + " --scan-period 0.001 --laps 1000 --beams 10000", 1, {"readings", "--scan-period"}},
       {"simulate --map MAP --out /proc/self/s.log", 1, {"/proc/self/s.log: expected a writable"}},
       {"simulate --map MAP --out /proc/self/s.log.gz", 1, {"/proc/self/s.log.gz: expected a"}},
+      {sim + " --format xml", 2, {"--format", "xml"}},
+      {"simulate --out DIR/s.log --format robot-log", 2, {"--format requires --map"}},
+      {"simulate --out DIR/s.log --odometry-alphas 0 0 0 0", 2, {"--odometry-alphas requires"}},
+      {sim + " --odometry-alphas 0.1 0.1 0.1 0.1", 1, {"--odometry-alphas", "--format robot-log"}},
+      {sim + " --format robot-log --odometry-alphas 0.1 0.1 0.1", 2, {"--odometry-alphas"}},
+      {sim + " --format robot-log --odometry-alphas 0.1 nan 0.1 0.1",
+       2,
+       {"--odometry-alphas", "finite"}},
+      {sim + " --format robot-log --odometry-alphas 0.1 11 0.1 0.1",
+       2,
+       {"--odometry-alphas", "[0, 10]"}},
+      {"simulate --map 'DIR/a b/room.yaml' --format robot-log --out DIR/s.txt",
+       1,
+       {"'a b/room.yaml'", "without blanks"}},
   };
   // Numeric flags: not a number, NaN, below and above the accepted range.
   const std::vector<std::pair<std::string, std::vector<std::string>>> numeric = {
@@ -507,8 +523,62 @@ TEST(Cli, MapAndLaserSimulationRefuseBadInputNamingTheFlagOrFile) {
   // Nothing was written by a refused command (the map and log fixtures aside).
   for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
     const std::string name = entry.path().filename().string();
-    EXPECT_TRUE(name.rfind("room.", 0) == 0 || name.rfind("short.", 0) == 0 || name == "robot.txt")
+    EXPECT_TRUE(name.rfind("room.", 0) == 0 || name.rfind("short.", 0) == 0 ||
+                name == "robot.txt" || name == "a b")
         << "left behind: " << name;
+  }
+}
+
+// A robot log of a laser run (docs/formats.md, "Laser runs"): each malformed record names the
+// file and line, a missing map or stream of records names what is missing, a flag that means
+// nothing for it is refused.
+TEST(Cli, LaserMclOnARobotLogRefusesBadInputNamingFileAndLine) {
+  TempDir dir("laser_robot_log_bad_input");
+  write_laser_map(dir.path() / "room.yaml", "room.pgm", 40 * 40);
+  // Three scans 0.3 m apart in the 4 m room: enough to run, no truth.
+  const std::string good =
+      "map room.yaml\nodometry 0 1 1 0\nlaser 0 -1 1 0 5 3 1 1 1\nodometry 1 1.3 1 0\n"
+      "laser 1 -1 1 0 5 3 1 1 1\nodometry 2 1.6 1 0\nlaser 2 -1 1 0 5 3 1 1 1\n";
+  const std::vector<std::pair<std::string, std::string>> logs = {
+      {"good.txt", good},
+      {"offmap.txt", good + "truth 0 50 50 0\n"},
+      {"nomap.txt", "odometry 0 0 0 0\nlaser 0 -1 1 0 5 3 1 1 1\n"},
+      {"missing.txt", "# a laser run\nmap gone.yaml\nodometry 0 0 0 0\n"},
+      {"nan.txt", "map room.yaml\nodometry 0 0 0 0\nlaser 0 -1 1 0 5 3 1 nan 1\n"},
+      {"count.txt", "laser 0 -1 1 0 5 3 1 1\n"},
+      {"flat.txt", "laser 0 -1 0 0 5 1 1\n"},
+      {"time.txt", "odometry 1 0 0 0\nodometry 1 0 0 0\n"},
+      {"twomaps.txt", "map room.yaml\nmap room.yaml\n"},
+      {"noodom.txt", "map room.yaml\nlaser 0 -1 1 0 5 3 1 1 1\n"},
+      {"nolaser.txt", "map room.yaml\nodometry 0 0 0 0\n"},
+      {"late.txt", "map room.yaml\nodometry 5 0 0 0\nodometry 6 0 0 0\nlaser 0 -1 1 0 5 1 1\n"},
+  };
+  for (const auto& [name, text] : logs) std::ofstream(dir.path() / name) << text;
+  const std::string d = dir.path().string() + "/";
+  const std::string mcl = "mcl --sensor laser -M 20 --runs 1 --json --data " + d;
+  const std::vector<BadInput> rows = {
+      {mcl + "nomap.txt", 1, {"nomap.txt", "--map FILE, or a 'map' record", "got neither"}},
+      {mcl + "missing.txt", 1, {"missing.txt:2: field 'file'", "got 'gone.yaml'"}},
+      {mcl + "nan.txt", 1, {"nan.txt:3: field 'r_2'", "got 'nan'"}},
+      {mcl + "count.txt", 1, {"count.txt:1: field 'n': expected 3 readings after it, got 2"}},
+      {mcl + "flat.txt", 1, {"flat.txt:1: field 'angle_increment'"}},
+      {mcl + "time.txt", 1, {"time.txt:2: field 'time'", "'odometry'"}},
+      {mcl + "twomaps.txt", 1, {"twomaps.txt:2: expected one 'map' record"}},
+      {mcl + "noodom.txt", 1, {"noodom.txt", "expected 'odometry' records"}},
+      {mcl + "nolaser.txt", 1, {"nolaser.txt", "expected 'laser' records"}},
+      {mcl + "late.txt", 1, {"late.txt", "time span of the 'odometry' records (5 to 6 s)"}},
+      {mcl + "offmap.txt", 1, {"offmap.txt", "outside the map"}},
+      {mcl + "good.txt --map " + d + "none.yaml", 1, {"none.yaml"}},
+      {mcl + "good.txt --init global --alphas 0.1 0.1 0.1 0.1",
+       1,
+       {"--alphas", "good.txt records its odometry", "--filter-alphas"}},
+      {mcl + "good.txt", 1, {"known start", "no truth", "--init global"}},
+  };
+  for (const BadInput& row : rows) {
+    const auto r = run_cli(row.args);
+    EXPECT_EQ(r.code, row.code) << row.args << "\n" << r.err;
+    for (const auto& s : row.says)
+      EXPECT_NE(r.err.find(s), std::string::npos) << row.args << "\n" << r.err;
   }
 }
 

@@ -1,12 +1,14 @@
 // `implicit map` and `implicit simulate --map`: the map of a CARMEN log against closed forms and
 // the library's mapper; the simulated log against the motion's closed form and cast_ray on the
-// map; and the simulated log localized by `implicit mcl --sensor laser`.
+// map; the simulated log localized by `implicit mcl --sensor laser`, in both formats (CARMEN and
+// the robot log with its own odometry); and the documented robot log of a laser run.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,7 @@
 #include "implicit/core/weights.hpp"
 #include "implicit/robot/carmen.hpp"
 #include "implicit/robot/grid_mapping.hpp"
+#include "implicit/robot/log_format.hpp"
 #include "implicit/robot/map_io.hpp"
 
 namespace {
@@ -342,17 +345,50 @@ TEST(SimulateLaserCli, AutomaticTourStaysClearAndReturnsToItsStart) {
   EXPECT_EQ(implicit::test::read_file(log), implicit::test::read_file(again));
 }
 
-// The simulated log localized on its own map. The bound on the position RMSE: the likelihood
-// field weighs each used beam by N(d; 0, sigma_hit^2) in its end point's distance d to the
-// nearest wall, and a pose off by delta moves the end points on a wall of normal n by n . delta,
-// so k used beams on walls facing one axis give the posterior a variance of at most
+// The bound on the position RMSE of a filter that follows the robot through these scans: the
+// likelihood field weighs each used beam by N(d; 0, sigma_hit^2) in its end point's distance d to
+// the nearest wall, and a pose off by delta moves the end points on a wall of normal n by
+// n . delta, so k used beams on walls facing one axis give the posterior a variance of at most
 // sigma_hit^2 / k along it (the prediction only adds information; z_rand only fattens the tails).
 // With k_x and k_y counted per scan from the walls the beams hit (faces of cells at x = const
 // or y = const, in the proportion max_beams / beams of the used ones), the expected squared
 // position error is at most 2 sigma_hit^2 / min(k_x, k_y); the bound is 4.5 times the root of its
-// mean over the scans. It holds for a filter that follows the robot whatever the scan noise
-// (0.02 m here, far below sigma_hit = 0.2 m), and fails for one that loses it or reads the beams
-// at other angles.
+// mean over the scans. It holds whatever the scan noise (0.02 m here, far below sigma_hit =
+// 0.2 m) and the odometry's, and fails for a filter that loses the robot or reads the beams at
+// other angles. `j` is the run's JSON (sigma_hit, max_beams).
+double rmse_bound(const OccupancyGrid& map, const std::vector<Pose>& poses,
+                  const std::vector<robot::LaserScan>& scans, const nlohmann::json& j) {
+  const double sigma_hit = j["laser"]["sigma_hit"].get<double>();
+  const double used = j["laser"]["max_beams"].get<double>() / static_cast<double>(scans[0].size());
+  double mean_inverse_k = 0.0;
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    const Pose& p = poses[k];
+    int facing_x = 0, facing_y = 0;
+    for (std::size_t i = 0; i < scans[k].size(); ++i) {
+      const double a = p(2) + scans[k].bearing(i);
+      const double range = robot::cast_ray(map, p.head<2>(), a, 30.0);
+      const Vec<2> e = (p.head<2>() + range * Vec<2>(std::cos(a), std::sin(a)) - map.origin()) /
+                       map.resolution();
+      const double off_x = std::abs(e.x() - std::round(e.x()));
+      const double off_y = std::abs(e.y() - std::round(e.y()));
+      ++(off_x < off_y ? facing_x : facing_y);
+    }
+    const double k_min = used * std::min(facing_x, facing_y);
+    EXPECT_GE(k_min, 1.0) << "scan " << k << " sees walls of one direction only";
+    mean_inverse_k += 1.0 / k_min / static_cast<double>(scans.size());
+  }
+  return 4.5 * std::sqrt(2.0 * sigma_hit * sigma_hit * mean_inverse_k);
+}
+
+/// Every run's position RMSE in the JSON `j` (printed by the command as `out`) is below `bound`.
+void expect_runs_within(const nlohmann::json& j, double bound, const std::string& out) {
+  for (const auto& run : j["per_run"])
+    EXPECT_LT(run["position_rmse_m"].get<double>(), bound) << out;
+  std::printf("position RMSE %.4f m (bound %.4f m)\n", j["position_rmse_m"]["mean"].get<double>(),
+              bound);
+}
+
+// The simulated log localized on its own map, within rmse_bound.
 TEST(SimulateLaserCli, MclOnTheSimulatedLogFollowsTheRobot) {
   TempDir dir("simulate_laser_mcl");
   const fs::path yaml = write_room_map(dir);
@@ -368,33 +404,160 @@ TEST(SimulateLaserCli, MclOnTheSimulatedLogFollowsTheRobot) {
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_GE(j["updates"].get<int>(), 20);
   EXPECT_EQ(j["lost_runs"], 0);
+  EXPECT_EQ(j["odometry"], "synthesised");
 
   const robot::CarmenLog s = robot::read_carmen(log);
-  const double sigma_hit = j["laser"]["sigma_hit"].get<double>();
-  const double used =
-      j["laser"]["max_beams"].get<double>() / static_cast<double>(s.scans[0].size());
-  double mean_inverse_k = 0.0;
-  for (std::size_t k = 0; k < s.scans.size(); ++k) {
-    const Pose& p = s.laser_poses[k];
-    int facing_x = 0, facing_y = 0;
-    for (std::size_t i = 0; i < s.scans[k].size(); ++i) {
-      const double a = p(2) + s.scans[k].bearing(i);
-      const double range = robot::cast_ray(map, p.head<2>(), a, 30.0);
-      const Vec<2> e = (p.head<2>() + range * Vec<2>(std::cos(a), std::sin(a)) - map.origin()) /
-                       map.resolution();
-      const double off_x = std::abs(e.x() - std::round(e.x()));
-      const double off_y = std::abs(e.y() - std::round(e.y()));
-      ++(off_x < off_y ? facing_x : facing_y);
+  expect_runs_within(j, rmse_bound(map, s.laser_poses, s.scans, j), r.out);
+}
+
+// ---- the robot log format (simulate --format robot-log, mcl on it) ---------------------------
+
+// The two formats of one simulation: the same scans (no return: 80 m in CARMEN, inf here), the
+// true poses as truth, the map named relative to the log. With zero odometry noise each odometry
+// increment is the true one (rounding only), from the odometry frame's origin.
+TEST(SimulateLaserCli, RobotLogFormatCarriesTheCarmenLogsScansTruthAndOdometry) {
+  TempDir dir("simulate_laser_robot_log");
+  const fs::path yaml = write_room_map(dir);
+  const std::string args = fmt::format("simulate --json --map '{}' --waypoints '{}'{} --seed 4",
+                                       yaml.string(), kWaypoints, kMotion);
+  const fs::path carmen = dir.path() / "sim.log", ours = dir.path() / "logs" / "sim.txt";
+  fs::create_directories(ours.parent_path());
+  ASSERT_EQ(run_cli(args + " --out '" + carmen.string() + "'").code, 0);
+  const auto r =
+      run_cli(args + " --format robot-log --odometry-alphas 0 0 0 0 --out '" + ours.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["format"], "robot-log");
+  const robot::CarmenLog c = robot::read_carmen(carmen);
+  const robot::RobotLog log = robot::read_robot_log(ours);
+  ASSERT_TRUE(log.map.has_value());
+  EXPECT_EQ(log.map->file, "../room.yaml");
+  EXPECT_EQ(fs::canonical(robot::map_file(log)), fs::canonical(yaml));
+  ASSERT_EQ(log.laser_scans.size(), 45u);
+  ASSERT_EQ(log.truth.size(), 45u);
+  ASSERT_EQ(log.odometry.size(), 45u);
+  EXPECT_EQ(log.odometry[0].pose, Pose::Zero());
+  for (std::size_t k = 0; k < 45; ++k) {
+    const robot::LaserScan &a = c.scans[k], &b = log.laser_scans[k];
+    EXPECT_EQ(b.time, a.time) << k;
+    EXPECT_EQ(b.angle_min, a.angle_min) << k;
+    EXPECT_EQ(b.angle_increment, a.angle_increment) << k;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(b.is_hit(i), a.is_hit(i)) << k << " " << i;
+      // CARMEN's text has the shortest round-trip digits, ours 17: the same double.
+      if (a.is_hit(i)) {
+        EXPECT_EQ(b.ranges[i], a.ranges[i]) << k << " " << i;
+      }
     }
-    const double k_min = used * std::min(facing_x, facing_y);
-    ASSERT_GE(k_min, 1.0) << "scan " << k << " sees walls of one direction only";
-    mean_inverse_k += 1.0 / k_min / static_cast<double>(s.scans.size());
+    EXPECT_EQ(log.truth[k].time, a.time);
+    EXPECT_EQ(log.truth[k].position, c.laser_poses[k].head<2>()) << k;
+    EXPECT_EQ(*log.truth[k].heading, c.laser_poses[k](2)) << k;
+    if (k == 0) continue;
+    const Pose moved = robot::between(c.laser_poses[k - 1], c.laser_poses[k]);
+    const Pose reported = robot::between(log.odometry[k - 1].pose, log.odometry[k].pose);
+    for (int m = 0; m < 2; ++m) EXPECT_NEAR(reported(m), moved(m), 1e-12) << k;
+    EXPECT_NEAR(implicit::wrap_angle(reported(2) - moved(2)), 0.0, 1e-12) << k;
   }
-  const double bound = 4.5 * std::sqrt(2.0 * sigma_hit * sigma_hit * mean_inverse_k);
-  for (const auto& run : j["per_run"])
-    EXPECT_LT(run["position_rmse_m"].get<double>(), bound) << r.out;
-  std::printf("position RMSE %.4f m (bound %.4f m)\n", j["position_rmse_m"]["mean"].get<double>(),
-              bound);
+}
+
+// Localization on the robot log's own odometry (noisy: the default alphas) and map record, with
+// no --map: within the bound of the CARMEN run.
+TEST(SimulateLaserCli, MclOnTheSimulatedRobotLogUsesItsOdometryAndFollowsTheRobot) {
+  TempDir dir("simulate_laser_robot_log_mcl");
+  const fs::path yaml = write_room_map(dir);
+  const OccupancyGrid map = robot::load_map(yaml);
+  const fs::path log = dir.path() / "sim.txt";
+  const auto sim = run_cli(fmt::format("simulate --map '{}' --format robot-log --out '{}' --seed 3",
+                                       yaml.string(), log.string()));
+  ASSERT_EQ(sim.code, 0) << sim.err;
+  const auto r = run_cli(
+      fmt::format("mcl --sensor laser --data '{}' --runs 2 -M 100 --json --quiet", log.string()));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["odometry"], "recorded");
+  EXPECT_TRUE(j["odometry_noise"].is_null());
+  EXPECT_GE(j["updates"].get<int>(), 20);
+  EXPECT_EQ(j["scored_updates"], 2 * j["updates"].get<int>());
+  EXPECT_EQ(j["lost_runs"], 0);
+  const robot::RobotLog s = robot::read_robot_log(log);
+  std::vector<Pose> truth;
+  for (const auto& t : s.truth) truth.emplace_back(t.position(0), t.position(1), *t.heading);
+  expect_runs_within(j, rmse_bound(map, truth, s.laser_scans, j), r.out);
+}
+
+// Without truth the filter runs, but scores nothing: exit 1 unless --allow-empty (then the
+// position metrics are null); a known start has no pose to start from.
+TEST(SimulateLaserCli, RobotLogWithoutTruthScoresNothingUnlessAllowed) {
+  TempDir dir("simulate_laser_no_truth");
+  const fs::path yaml = write_room_map(dir);
+  const fs::path full = dir.path() / "full.txt", bare = dir.path() / "bare.txt";
+  ASSERT_EQ(run_cli(fmt::format("simulate --map '{}' --format robot-log --out '{}'", yaml.string(),
+                                full.string()))
+                .code,
+            0);
+  std::istringstream in(implicit::test::read_file(full));
+  std::string text, line;
+  while (std::getline(in, line))
+    if (line.rfind("truth ", 0) != 0) text += line + "\n";
+  implicit::test::write_file(bare, text);
+  const std::string mcl =
+      "mcl --sensor laser --data '" + bare.string() + "' -M 50 --runs 1 --json --quiet";
+  const auto global = run_cli(mcl + " --init global");
+  EXPECT_EQ(global.code, 1) << global.err;
+  EXPECT_NE(global.err.find("scored nothing: scored_updates is 0"), std::string::npos)
+      << global.err;
+  const auto allowed = run_cli(mcl + " --init global --allow-empty");
+  ASSERT_EQ(allowed.code, 0) << allowed.err;
+  const auto j = nlohmann::json::parse(allowed.out);
+  EXPECT_EQ(j["scored_updates"], 0);
+  EXPECT_TRUE(j["position_rmse_m"]["mean"].is_null());
+  EXPECT_TRUE(j["per_run"][0]["position_rmse_m"].is_null());
+  const auto known = run_cli(mcl);
+  EXPECT_EQ(known.code, 1);
+  EXPECT_NE(known.err.find("no truth (with heading) at its time 0 s"), std::string::npos)
+      << known.err;
+  EXPECT_NE(known.err.find("--init global"), std::string::npos) << known.err;
+}
+
+// The example of docs/formats.md ("```robot-log-laser"), in the room it names: it parses, and
+// `mcl --sensor laser` runs on it and scores every update.
+TEST(SimulateLaserCli, DocumentedLaserLogRunsAndIsScored) {
+  TempDir dir("documented_laser_log");
+  write_room_map(dir);  // room.yaml, the example's `map`
+  const std::string doc =
+      implicit::test::read_file(fs::path(IMPLICIT_SOURCE_DIR) / "docs/formats.md");
+  const std::string fence = "```robot-log-laser\n";
+  const std::size_t begin = doc.find(fence);
+  ASSERT_NE(begin, std::string::npos);
+  const std::size_t end = doc.find("```", begin + fence.size());
+  ASSERT_NE(end, std::string::npos);
+  const fs::path log = dir.path() / "example.txt";
+  implicit::test::write_file(log, doc.substr(begin + fence.size(), end - begin - fence.size()));
+  const robot::RobotLog parsed = robot::read_robot_log(log);
+  EXPECT_EQ(parsed.laser_scans.size(), 3u);
+  EXPECT_EQ(parsed.odometry.size(), 3u);
+  EXPECT_EQ(parsed.truth.size(), 3u);
+  // Its readings are the room's, at the truth, to the 3 decimals written (inf: the wall is
+  // beyond range_max).
+  const OccupancyGrid map = robot::load_map(dir.path() / "room.yaml");
+  for (std::size_t k = 0; k < parsed.laser_scans.size(); ++k) {
+    const robot::LaserScan& scan = parsed.laser_scans[k];
+    const robot::TruthRecord& truth = parsed.truth[k];
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      const double range =
+          robot::cast_ray(map, truth.position, *truth.heading + scan.bearing(i), 30.0);
+      if (std::isinf(scan.ranges[i])) {
+        EXPECT_GE(range, scan.range_max) << k << " " << i;
+      } else {
+        EXPECT_NEAR(scan.ranges[i], range, 1e-3) << k << " " << i;
+      }
+    }
+  }
+  const auto r = run_cli("mcl --sensor laser --data '" + log.string() + "' -M 50 --runs 1 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["updates"], 3);
+  EXPECT_EQ(j["scored_updates"], 3);
+  EXPECT_EQ(j["odometry"], "recorded");
 }
 
 }  // namespace

@@ -196,7 +196,9 @@ TEST(RobotLog, RejectsMalformedInputNamingLineAndField) {
       {"scan 1 1\nobs 1 0.5\nobs 2 0.5\n", "test.log:3: expected an 'obs' line only after"},
       {"scan 1 2\nobs 1 0.5\ncontrol 1 1 1\n", "test.log:3: expected 1 more 'obs' line(s)"},
       {"scan 1 1\nobs -1 0.5\n", "test.log:2: field 'range': expected >= 0, got -1"},
-      {"odometry 1 2 3\n", "test.log:1: expected a record kind vehicle|landmark|initial|control"},
+      {"velocity 1 2 3\n",
+       "test.log:1: expected a record kind vehicle|landmark|initial|control|scan|obs|truth|map|"
+       "laser_mount|odometry|laser, got 'velocity'"},
       {"initial 0 0 0 0 0.1 -0.1 0.1\n", "test.log:1: field 'std_y': expected a non-negative"},
       {"truth 1 0 inf\n", "test.log:1: field 'y': expected a finite number, got 'inf'"},
   };

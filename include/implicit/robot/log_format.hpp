@@ -15,10 +15,22 @@
 //   obs 12.05 2.0100 4
 //   truth 45.047 5.1048 4.2044 [heading]      # t x y [heading]: ground truth (GPS, simulation)
 //
+// Laser runs (`implicit mcl --sensor laser --data`) read four more records:
+//
+//   map lab.yaml                              # the map_server YAML the scans are matched against
+//                                             # (relative to the log's folder), at most one
+//   laser_mount 0.2 0 0                       # x y theta: the laser on the robot (default 0 0 0)
+//   odometry 12.5 3.02 -1.4 0.31              # t x y theta: the robot's odometry pose at t
+//   laser 12.5 -1.5708 0.0174533 0.05 30 3 2.1 inf 1.87
+//                                             # t angle_min angle_increment range_min range_max
+//                                             # n r_1 ... r_n ('inf': no return), LaserScan's
+//
 // Records of one kind must have strictly increasing times (scans and truth too); the kinds may
 // be interleaved in any order. A landmark id used by an `obs` line must be defined by a `landmark`
-// line (anywhere in the file). Readers reject malformed input with a ParseError naming the file,
-// the line and the field ("log.txt:12: field 'bearing': expected a finite number, got 'nan'").
+// line (anywhere in the file). A `map` file must exist (read_robot_log checks it; a log parsed
+// from a stream is not checked, as it has no folder). Readers reject malformed input with a
+// ParseError naming the file, the line and the field ("log.txt:12: field 'bearing': expected a
+// finite number, got 'nan'").
 //
 //   RobotLog log = read_robot_log("run.log");   // or "run.log.gz": gzip is read transparently
 //   write_robot_log("copy.log", log);        // round-trips exactly (17 significant digits)
@@ -33,6 +45,7 @@
 
 #include "implicit/core/types.hpp"
 #include "implicit/robot/landmark_map.hpp"
+#include "implicit/robot/laser_scan.hpp"
 #include "implicit/robot/range_bearing.hpp"
 #include "implicit/robot/unicycle_model.hpp"
 #include "implicit/robot/ute_model.hpp"
@@ -96,6 +109,18 @@ VehicleDeclaration declare_vehicle(const UnicycleParams& p);
 UteParams ute_params(const VehicleDeclaration& v, UteParams base = {});
 UnicycleParams unicycle_params(const VehicleDeclaration& v, UnicycleParams base = {});
 
+/// The `map` record: the occupancy map a laser run matches its scans against.
+struct MapReference {
+  std::string file;      ///< as written: a path without blanks, relative to the log's folder
+  std::size_t line = 0;  ///< line of the record in its file (0: not read from one)
+};
+
+/// The `odometry` record: the robot's pose as its odometry reports it (its own frame) at `time`.
+struct OdometryRecord {
+  double time = 0.0;
+  Pose pose;
+};
+
 struct RobotLog {
   std::optional<VehicleDeclaration> vehicle;  ///< absent in logs that do not declare one
   LandmarkMap landmarks;
@@ -103,12 +128,28 @@ struct RobotLog {
   std::vector<TimedControl> controls;
   std::vector<ObservationSet> scans;
   std::vector<TruthRecord> truth;
+  std::optional<MapReference> map;        ///< laser runs: the map file
+  std::optional<LaserMount> laser_mount;  ///< absent: the laser sits at the robot's origin
+  std::vector<OdometryRecord> odometry;   ///< laser runs: the control (increments)
+  std::vector<LaserScan> laser_scans;     ///< `laser` records, in time order
   std::string source;  ///< the file (or stream name) it was parsed from, for error messages
 };
 
+/// The file of the log's `map` record: as written when absolute, else relative to the folder of
+/// log.source. Empty without a `map` record.
+std::filesystem::path map_file(const RobotLog& log);
+
+/// Whether `text` is a robot log: its first record (the first line that is not blank or a
+/// comment) starts with one of the record kinds above. The other text logs the tools read,
+/// CARMEN's, start with an upper-case message name (FLASER, ODOM, PARAM, ...), never one of them.
+bool is_robot_log(std::string_view text);
+
 /// Parses a log from a stream; `name` is used in error messages.
 RobotLog parse_robot_log(std::istream& in, const std::string& name);
+/// Reads a log file (plain or gzip); its `map` record must name an existing file.
 RobotLog read_robot_log(const std::filesystem::path& path);
+/// A `map` record whose file has a blank, '#' or a line break is an InvalidArgument: it would
+/// not read back.
 void write_robot_log(std::ostream& out, const RobotLog& log);
 /// Writes the log to a file, gzip-compressed when the name ends in ".gz".
 void write_robot_log(const std::filesystem::path& path, const RobotLog& log);
@@ -156,5 +197,12 @@ struct TruthTrack {
 inline constexpr double kDefaultTruthMaxGap = 1.0;  ///< [s]; five periods of a 5 Hz GPS
 TruthTrack interpolate_truth(const RobotLog& log, const StepSchedule& schedule,
                              double max_gap = kDefaultTruthMaxGap);
+/// The same at arbitrary increasing times (e.g. those of the laser scans).
+TruthTrack interpolate_truth(const RobotLog& log, const std::vector<double>& times,
+                             double max_gap = kDefaultTruthMaxGap);
+/// The odometry pose at each time, interpolated linearly between `odometry` records (heading
+/// along the shorter arc, so continuous in the odometry's own frame); NaN outside their time
+/// range. No gap limit: odometry has no outages, only a rate.
+std::vector<Pose> interpolate_odometry(const RobotLog& log, const std::vector<double>& times);
 
 }  // namespace implicit::robot
