@@ -20,6 +20,21 @@ void add_laser_options(CLI::App& sub, LaserCommand& l) {
                  "log with laser records)")
       ->check(CLI::IsMember({"landmark", "laser"}))
       ->capture_default_str();
+  sub.add_option("--laser-model", l.laser_model,
+                 "laser: likelihood-field (distances to the nearest obstacle; both proposals) or "
+                 "beam (ray casting; bootstrap only)")
+      ->check(CLI::IsMember({"likelihood-field", "beam"}))
+      ->capture_default_str();
+  sub.add_option("--z-short", s.beam.z_short, "laser, beam model: weight of an unexpected obstacle")
+      ->check(in_range(0.0, 1e6))
+      ->capture_default_str();
+  sub.add_option("--z-max", s.beam.z_max, "laser, beam model: weight of a missed echo (no return)")
+      ->check(in_range(0.0, 1e6))
+      ->capture_default_str();
+  sub.add_option("--lambda-short", s.beam.lambda_short,
+                 "laser, beam model: [1/m] rate of the unexpected obstacles' exponential")
+      ->check(in_range(1e-6, 1e6))
+      ->capture_default_str();
   sub.add_option("--alphas", l.alphas,
                  "laser: alpha1..alpha4 of the odometry synthesised from a CARMEN log's "
                  "reference poses (nav2's names; default 0.02 each; a robot log's odometry is "
@@ -100,6 +115,20 @@ robot::OdometryAlphas alphas_of(const std::vector<double>& v, const robot::Odome
   return {v[0], v[1], v[2], v[3]};
 }
 
+/// --recovery for a laser run: uniform (AMCL's source over free space) or none; auto is uniform
+/// for a global start and none for a known one. The landmark runs' mixture source is not one
+/// the laser has.
+bool laser_recovery(const MclSettings& shared) {
+  require(shared.recovery != "mixture",
+          "mcl --sensor laser: --recovery mixture is the landmark runs' source; a laser run "
+          "takes --recovery uniform, none or auto");
+  require(shared.kidnap_at < 0,
+          "mcl --sensor laser: --kidnap-at is not available for laser runs; kidnapping is "
+          "tested on the landmark logs");
+  if (shared.recovery == "auto") return shared.init == "global";
+  return shared.recovery == "uniform";
+}
+
 void write_tum(const std::string& file, const experiments::LaserMclResult& r,
                const experiments::LaserDataset& d) {
   OutputFile out(file);
@@ -114,8 +143,8 @@ void write_tum(const std::string& file, const experiments::LaserMclResult& r,
 
 }  // namespace
 
-void run_laser_mcl_command(const MclSettings& shared, const std::string& map_file,
-                           LaserCommand& l, const RunContext& ctx, bool allow_empty) {
+void run_laser_mcl_command(const MclSettings& shared, const std::string& map_file, LaserCommand& l,
+                           const RunContext& ctx, bool allow_empty) {
   auto& s = l.settings;
   require(!shared.data_dir.empty(),
           "mcl --sensor laser: expected --data naming a CARMEN laser log (e.g. "
@@ -134,6 +163,20 @@ void run_laser_mcl_command(const MclSettings& shared, const std::string& map_fil
   s.laser.interpolation = experiments::parse_interpolation(l.interpolation);
   s.laser.aggregation = l.aggregation == "cubed-sum" ? robot::BeamAggregation::kCubedSum
                                                      : robot::BeamAggregation::kProduct;
+  s.laser_model = experiments::parse_laser_model(l.laser_model);
+  // The shared parameters (nav2's names) mean the same in both models.
+  s.beam.z_hit = s.laser.z_hit;
+  s.beam.z_rand = s.laser.z_rand;
+  s.beam.sigma_hit = s.laser.sigma_hit;
+  s.beam.max_beams = s.laser.max_beams;
+  s.beam.laser_max_range = s.laser.laser_max_range;
+  s.kld.enabled = shared.kld;
+  s.kld.kld_err = shared.kld_err;
+  s.kld.kld_z = shared.kld_z;
+  s.recovery.enabled = laser_recovery(shared);
+  s.recovery.recovery_alpha_slow = shared.recovery_alpha_slow;
+  s.recovery.recovery_alpha_fast = shared.recovery_alpha_fast;
+  s.recovery.kidnap_probability = shared.kidnap_probability;
   s.keep_tracks = !l.trajectory.empty();
   const experiments::LaserDataset data = experiments::load_laser_dataset(s.data);
   require(l.alphas.empty() || !data.odometry_recorded(),
@@ -154,18 +197,20 @@ void run_laser_mcl_command(const MclSettings& shared, const std::string& map_fil
     print_json(j);
   } else {
     fmt::print(
-        "laser MCL on {}: {} proposal, M = {}, {} run{}, {} updates of {} scans\n"
+        "laser MCL on {}: {} proposal, {} model, M = {}{}, {} run{}, {} updates of {} scans\n"
         "  position RMSE {:.3f} ± {:.3f} m (median {:.3f}), heading RMSE {:.4f} rad, lost runs "
         "{}\n"
-        "  ESS/M {:.2f}, {:.1f} us per update ({:.3f} us per particle), {:.1f} s\n",
-        r.data_name, experiments::to_string(s.proposal), s.particles, s.runs,
-        s.runs == 1 ? "" : "s", r.updates, r.scans_in_log, r.position_rmse_m.mean,
-        r.position_rmse_m.se, r.position_rmse_m.median, r.heading_rmse_rad.mean, r.lost_runs,
-        r.ess_fraction.mean, r.cpu_us_per_update.mean,
-        r.cpu_us_per_update.mean / static_cast<double>(s.particles), r.seconds);
+        "  ESS/M {:.2f}, {:.0f} particles on average, {:.1f} us per update ({:.3f} us per "
+        "particle), {:.1f} s\n",
+        r.data_name, experiments::to_string(s.proposal), experiments::to_string(s.laser_model),
+        s.particles, s.kld.enabled ? " (first; KLD-sampling)" : "", s.runs, s.runs == 1 ? "" : "s",
+        r.updates, r.scans_in_log, r.position_rmse_m.mean, r.position_rmse_m.se,
+        r.position_rmse_m.median, r.heading_rmse_rad.mean, r.lost_runs, r.ess_fraction.mean,
+        r.particles.mean, r.cpu_us_per_update.mean, r.cpu_us_per_update.mean / r.particles.mean,
+        r.seconds);
     if (s.start == experiments::StartKind::kGlobal)
-      fmt::print("  global starts: success rate {:.2f} within {} updates\n",
-                 r.global_success_rate, s.global_updates);
+      fmt::print("  global starts: success rate {:.2f} within {} updates\n", r.global_success_rate,
+                 s.global_updates);
   }
   // A robot log without truth runs, but scores nothing.
   require_scored(j, "mcl", {}, {"scored_updates"}, allow_empty);

@@ -20,6 +20,7 @@ struct LaserCommand {
   experiments::LaserMclSettings settings;
   std::vector<double> alphas, filter_alphas;
   std::string interpolation = "bicubic", aggregation = "product";
+  std::string laser_model = "likelihood-field";
   std::string trajectory;  ///< TUM file of the first run's estimate
 };
 

@@ -15,33 +15,6 @@ namespace {
 
 constexpr double kNegInf = -std::numeric_limits<double>::infinity();
 
-struct FreeSpace {
-  std::vector<Eigen::Vector2i> cells;
-  robot::Pose draw(const robot::OccupancyGrid& map, Rng& rng) const {
-    const auto k = static_cast<std::size_t>(rng.uniform() * static_cast<double>(cells.size()));
-    const Eigen::Vector2i c = cells[std::min(k, cells.size() - 1)];
-    const double h = map.resolution();
-    const Vec<2> corner = map.origin() + h * c.cast<double>();
-    const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();  // in this order
-    const Vec<3> u(ux, uy, uh);
-    return robot::Pose(corner(0) + h * u(0), corner(1) + h * u(1), kPi * (2.0 * u(2) - 1.0));
-  }
-};
-
-FreeSpace free_space(const robot::OccupancyGrid& map) {
-  FreeSpace f;
-  for (int iy = 0; iy < map.height(); ++iy)
-    for (int ix = 0; ix < map.width(); ++ix)
-      if (map.is_free(ix, iy)) f.cells.emplace_back(ix, iy);
-  require(!f.cells.empty(), "global start: the map has no free cell to start in");
-  return f;
-}
-
-bool in_free_space(const robot::OccupancyGrid& map, const robot::Pose& x) {
-  const Eigen::Vector2i c = map.cell_of(x.head<2>());
-  return map.contains(c(0), c(1)) && map.is_free(c(0), c(1));
-}
-
 /// One component of the mixture: its centre and the factor of its Hessian.
 struct Component {
   robot::Pose mu = robot::Pose::Zero();
@@ -59,29 +32,45 @@ double log_normal(const Component& c, const robot::Pose& x) {
 
 }  // namespace
 
+FreeSpace::FreeSpace(const robot::OccupancyGrid& map) : map_(&map) {
+  for (int iy = 0; iy < map.height(); ++iy)
+    for (int ix = 0; ix < map.width(); ++ix)
+      if (map.is_free(ix, iy)) cells_.emplace_back(ix, iy);
+  require(!cells_.empty(), "global start: the map has no free cell to start in");
+}
+
+robot::Pose FreeSpace::draw(Rng& rng) const {
+  const auto k = static_cast<std::size_t>(rng.uniform() * static_cast<double>(cells_.size()));
+  const Eigen::Vector2i c = cells_[std::min(k, cells_.size() - 1)];
+  const double h = map_->resolution();
+  const Vec<2> corner = map_->origin() + h * c.cast<double>();
+  const double ux = rng.uniform(), uy = rng.uniform(), uh = rng.uniform();  // in this order
+  const Vec<3> u(ux, uy, uh);
+  return robot::Pose(corner(0) + h * u(0), corner(1) + h * u(1), kPi * (2.0 * u(2) - 1.0));
+}
+
+bool FreeSpace::contains(const robot::Pose& x) const {
+  const Eigen::Vector2i c = map_->cell_of(x.head<2>());
+  return map_->contains(c(0), c(1)) && map_->is_free(c(0), c(1));
+}
+
 GlobalStart global_start(const robot::LikelihoodFieldModel& model, const robot::OccupancyGrid& map,
                          const robot::LaserScan& scan, std::size_t particles, bool implicit,
                          std::uint64_t seed) {
   require(particles >= 1, "global start: expected at least one particle");
-  const FreeSpace space = free_space(map);
+  const FreeSpace space(map);
   const robot::PreparedScan z = model.prepare(scan, "the global start's scan");
+  if (!implicit || !model.differentiable())
+    return uniform_global_start(model, space, z, particles, seed);
   GlobalStart g;
   g.particles.resize(particles);
   g.log_weights.assign(particles, kNegInf);
-  if (!implicit || !model.differentiable()) {
-    parallel_for(particles, [&](std::size_t j) {
-      Rng rng({seed, 0, j, purpose::kGlobalInit});
-      g.particles[j] = space.draw(map, rng);
-      g.log_weights[j] = model.log_likelihood(z, g.particles[j]);
-    });
-    return g;
-  }
   const double s = 0.5;
   const robot::Mat3 pull = robot::Mat3::Identity() / (s * s);
   std::vector<Component> comps(particles);
   parallel_for(particles, [&](std::size_t k) {
     Rng rng({seed, 0, k, purpose::kGlobalInit});
-    const robot::Pose start = space.draw(map, rng);
+    const robot::Pose start = space.draw(rng);
     filter::PoseObjective<robot::LikelihoodFieldModel> f;
     f.reset(model, z, start, pull, 0.0);
     const auto r = newton_minimize<SmallFactor<3>>(f, start, filter::scan_newton_options());
@@ -109,7 +98,7 @@ GlobalStart global_start(const robot::LikelihoodFieldModel& model, const robot::
   parallel_for(
       particles,
       [&](std::size_t j) {
-        if (!comps[j].ok || !in_free_space(map, g.particles[j])) return;
+        if (!comps[j].ok || !space.contains(g.particles[j])) return;
         // log sum_i N_i(x_j), accumulated with a running maximum (no allocation per particle).
         double top = kNegInf, sum = 0.0;
         for (const Component& c : comps) {

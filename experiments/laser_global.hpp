@@ -12,8 +12,14 @@
 //              the uniform prior over free space, so a sample off it weighs 0).
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include <Eigen/Core>
+
+#include "implicit/core/parallel.hpp"
+#include "implicit/core/rng.hpp"
+#include "implicit/filter/recovery.hpp"
 #include "implicit/robot/laser_scan.hpp"
 #include "implicit/robot/likelihood_field.hpp"
 #include "implicit/robot/occupancy_grid.hpp"
@@ -25,9 +31,59 @@ struct GlobalStart {
   std::vector<double> log_weights;  ///< unnormalised
 };
 
-/// Throws InvalidArgument when the map has no free cell.
+/// The free cells of a map: where a robot may be, drawn from uniformly (position uniform in a
+/// uniformly chosen free cell, heading uniform).
+class FreeSpace {
+ public:
+  /// Throws InvalidArgument when the map has no free cell.
+  explicit FreeSpace(const robot::OccupancyGrid& map);
+  robot::Pose draw(Rng& rng) const;
+  bool contains(const robot::Pose& x) const;
+
+ private:
+  const robot::OccupancyGrid* map_;
+  std::vector<Eigen::Vector2i> cells_;
+};
+
+/// The bootstrap global start on any observation model: M poses drawn uniformly over free space,
+/// weighted by log p(z | x).
+template <typename Model>
+GlobalStart uniform_global_start(const Model& model, const FreeSpace& space,
+                                 const typename Model::Prepared& z, std::size_t particles,
+                                 std::uint64_t seed) {
+  GlobalStart g;
+  g.particles.resize(particles);
+  g.log_weights.resize(particles);
+  parallel_for(particles, [&](std::size_t j) {
+    Rng rng({seed, 0, j, purpose::kGlobalInit});
+    g.particles[j] = space.draw(rng);
+    g.log_weights[j] = model.log_likelihood(z, g.particles[j]);
+  });
+  return g;
+}
+
+/// A global start on the likelihood field: uniform for the bootstrap proposal (or a model
+/// without derivatives), the multi-start mixture for the implicit one. Throws InvalidArgument
+/// when the map has no free cell.
 GlobalStart global_start(const robot::LikelihoodFieldModel& model, const robot::OccupancyGrid& map,
                          const robot::LaserScan& scan, std::size_t particles, bool implicit,
                          std::uint64_t seed);
+
+/// Recovery's source for a laser filter (filter/recovery.hpp): AMCL's, poses drawn uniformly over
+/// free space. The robot is assumed kidnapped to a uniform pose, so log u(x) - log g(x) = 0 and
+/// an injected particle weighs p(z | x).
+template <typename Context>
+class UniformRecovery final : public filter::RecoverySource<Context> {
+ public:
+  explicit UniformRecovery(std::shared_ptr<const FreeSpace> space) : space_(std::move(space)) {}
+  bool prepare(const Context& ctx) override { return ctx.z != nullptr; }
+  double draw(const Context& ctx, Rng& rng, robot::Pose& x) const override {
+    x = space_->draw(rng);
+    return ctx.observation->log_likelihood(*ctx.z, x);
+  }
+
+ private:
+  std::shared_ptr<const FreeSpace> space_;
+};
 
 }  // namespace implicit::experiments

@@ -6,9 +6,11 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <type_traits>
 
 #include "experiments/laser_global.hpp"
 #include "implicit/core/error.hpp"
@@ -17,6 +19,17 @@
 #include "implicit/robot/distance_field.hpp"
 
 namespace implicit::experiments {
+
+std::string_view to_string(LaserModelKind m) {
+  return m == LaserModelKind::kBeam ? "beam" : "likelihood-field";
+}
+
+LaserModelKind parse_laser_model(std::string_view text) {
+  if (text == "likelihood-field") return LaserModelKind::kLikelihoodField;
+  if (text == "beam") return LaserModelKind::kBeam;
+  throw InvalidArgument(fmt::format("expected a laser model 'likelihood-field' or 'beam', got '{}'",
+                                    printable(text)));
+}
 
 void LaserMclSettings::validate() const {
   require(particles >= 1 && particles <= 10'000'000,
@@ -27,6 +40,14 @@ void LaserMclSettings::validate() const {
   odometry_noise.validate();
   filter_alphas.validate();
   laser.validate();
+  beam.validate();
+  require(!(laser_model == LaserModelKind::kBeam && proposal == ProposalKind::kImplicit),
+          "laser MCL: the implicit proposal needs an observation model with derivatives, and the "
+          "beam model has none (its expected range comes from ray casting, a step function of "
+          "the pose); use the likelihood field (--laser-model likelihood-field) or the bootstrap "
+          "proposal");
+  if (kld.enabled) filter::validate(kld);
+  if (recovery.enabled) filter::validate(recovery);
   require(resample_threshold >= 0 && resample_threshold <= 1,
           "laser MCL: expected a resampling threshold in [0, 1], got {}", resample_threshold);
   require(initial_std_xy > 0 && std::isfinite(initial_std_xy) && initial_std_heading > 0 &&
@@ -42,7 +63,6 @@ void LaserMclSettings::validate() const {
 
 namespace {
 
-using Model = robot::LikelihoodFieldModel;
 using Motion = robot::OdometryModel;
 
 double seconds_of_cpu() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
@@ -75,15 +95,37 @@ void follow(Filter& pf, const LaserDataset& d, const std::vector<Vec<3>>& odomet
   }
 }
 
-template <typename Proposal>
+/// The start of a global run: uniform over free space (the bootstrap proposal, or a model without
+/// derivatives), or the likelihood field's multi-start mixture (implicit).
+template <typename Model>
+GlobalStart start_anywhere(const LaserMclSettings& s, const LaserDataset& d, const Model& model,
+                           const FreeSpace& space, std::size_t first, std::uint64_t seed) {
+  if constexpr (std::is_same_v<Model, robot::LikelihoodFieldModel>) {
+    return global_start(model, d.map, d.scans[first], s.particles,
+                        s.proposal == ProposalKind::kImplicit, seed);
+  } else {
+    return uniform_global_start(
+        model, space, model.prepare(d.scans[first], "the global start's scan"), s.particles, seed);
+  }
+}
+
+template <typename Model, typename Proposal>
 Track run_one(const LaserMclSettings& s, const LaserDataset& d, const Model& model,
-              Proposal proposal, std::uint64_t seed, std::size_t first, std::size_t last) {
+              const std::shared_ptr<const FreeSpace>& space, Proposal proposal, std::uint64_t seed,
+              std::size_t first, std::size_t last) {
   const std::vector<Vec<3>> odometry = run_odometry(d, s.odometry_noise, seed);
   filter::FilterOptions o;
   o.particles = s.particles;
   o.seed = seed;
   o.resample_threshold = s.resample_threshold;
+  o.kld = s.kld;
+  o.kld.min_particles = std::min(o.kld.min_particles, s.particles);
+  o.kld.max_particles = std::max(o.kld.max_particles, s.particles);
+  o.recovery = s.recovery;
   filter::MonteCarloLocalization pf(Motion(s.filter_alphas), model, proposal, o);
+  using Filter = decltype(pf);
+  if (s.recovery.enabled)
+    pf.set_recovery_source(std::make_shared<UniformRecovery<typename Filter::Context>>(space));
   Track t;
   if (s.start == StartKind::kKnown) {
     const Vec<3> sd(s.initial_std_xy, s.initial_std_xy, s.initial_std_heading);
@@ -94,8 +136,7 @@ Track run_one(const LaserMclSettings& s, const LaserDataset& d, const Model& mod
     pf.initialize(start, Mat<3>(sd.array().square().matrix().asDiagonal()));
     t.estimates.push_back(start);
   } else {
-    const GlobalStart g = global_start(model, d.map, d.scans[first], s.particles,
-                                       s.proposal == ProposalKind::kImplicit, seed);
+    const GlobalStart g = start_anywhere(s, d, model, *space, first, seed);
     pf.initialize(g.particles, g.log_weights);
     t.estimates.push_back(pf.last().mean);
   }
@@ -141,7 +182,8 @@ LaserMclRun score(const LaserMclSettings& s, const LaserDataset& d, const Track&
   r.updates_to_converge = converged_from;
   r.global_success = converged_from >= 0 && converged_from <= s.global_updates;
   auto mean = [](const std::vector<double>& v) {
-    return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+    return v.empty() ? 0.0
+                     : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
   };
   r.ess_fraction_mean = mean(t.ess_fraction);
   r.particles_mean = mean(t.particles);
@@ -183,9 +225,30 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
           "anywhere (--init global)",
           d.name, d.scans.front().time);
   const auto wall0 = std::chrono::steady_clock::now();
-  auto field = std::make_shared<const robot::DistanceField>(
-      d.map, settings.laser.laser_likelihood_max_dist);
-  const Model model(field, settings.laser, d.mount);
+  const auto space = std::make_shared<const FreeSpace>(d.map);
+  // One filter run of the chosen observation model and proposal.
+  std::function<Track(std::uint64_t, std::size_t, std::size_t)> run_filter;
+  if (settings.laser_model == LaserModelKind::kBeam) {
+    const robot::BeamModel beam(std::make_shared<const robot::OccupancyGrid>(d.map), settings.beam,
+                                d.mount);
+    run_filter = [&settings, &d, space, beam](std::uint64_t seed, std::size_t first,
+                                              std::size_t last) {
+      return run_one(settings, d, beam, space, filter::BootstrapProposal{}, seed, first, last);
+    };
+  } else {
+    auto field = std::make_shared<const robot::DistanceField>(
+        d.map, settings.laser.laser_likelihood_max_dist);
+    const robot::LikelihoodFieldModel model(field, settings.laser, d.mount);
+    run_filter = [&settings, &d, space, model](std::uint64_t seed, std::size_t first,
+                                               std::size_t last) {
+      if (settings.proposal == ProposalKind::kBootstrap)
+        return run_one(settings, d, model, space, filter::BootstrapProposal{}, seed, first, last);
+      filter::ImplicitProposal p;
+      p.map = settings.implicit_map;
+      p.starts = settings.implicit_starts;
+      return run_one(settings, d, model, space, p, seed, first, last);
+    };
+  }
   LaserMclResult result;
   result.settings = settings;
   result.data_name = d.name;
@@ -209,14 +272,7 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
       first = static_cast<std::size_t>(run) * (n - span) / static_cast<std::size_t>(settings.runs);
       last = first + span;
     }
-    const Track t = settings.proposal == ProposalKind::kImplicit
-                        ? [&] {
-                            filter::ImplicitProposal p;
-                            p.map = settings.implicit_map;
-                            p.starts = settings.implicit_starts;
-                            return run_one(settings, d, model, p, seed, first, last);
-                          }()
-                        : run_one(settings, d, model, filter::BootstrapProposal{}, seed, first, last);
+    const Track t = run_filter(seed, first, last);
     result.runs.push_back(score(settings, d, t, seed, first));
     if (progress) progress(run + 1, settings.runs);
   }
@@ -224,13 +280,13 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
   result.heading_rmse_rad = mean_se(result.runs, &LaserMclRun::heading_rmse_rad);
   result.cpu_us_per_update = mean_se(result.runs, &LaserMclRun::cpu_us_per_update);
   result.ess_fraction = mean_se(result.runs, &LaserMclRun::ess_fraction_mean);
+  result.particles = mean_se(result.runs, &LaserMclRun::particles_mean);
   for (const LaserMclRun& r : result.runs) {
     result.lost_runs += r.lost ? 1 : 0;
     result.scored_updates += static_cast<std::size_t>(r.scored_updates);
     result.global_success_rate += r.global_success ? 1.0 / settings.runs : 0.0;
   }
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return result;
 }
 
@@ -259,29 +315,50 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
   j["seed"] = s.seed;
   j["scans_in_log"] = r.scans_in_log;
   j["updates"] = r.updates;
-  j["map"] = {{"width", r.map_width}, {"height", r.map_height},
-              {"resolution", r.map_resolution}, {"built_from_reference", r.map_built}};
+  j["map"] = {{"width", r.map_width},
+              {"height", r.map_height},
+              {"resolution", r.map_resolution},
+              {"built_from_reference", r.map_built}};
   const auto alphas = [](const robot::OdometryAlphas& a) {
-    return nlohmann::json{{"alpha1", a.alpha1}, {"alpha2", a.alpha2}, {"alpha3", a.alpha3},
-                          {"alpha4", a.alpha4}};
+    return nlohmann::json{
+        {"alpha1", a.alpha1}, {"alpha2", a.alpha2}, {"alpha3", a.alpha3}, {"alpha4", a.alpha4}};
   };
   j["odometry"] = r.odometry_recorded ? "recorded" : "synthesised";
   j["odometry_noise"] = r.odometry_recorded ? nlohmann::json(nullptr) : alphas(s.odometry_noise);
   j["filter_alphas"] = alphas(s.filter_alphas);
-  j["laser"] = {{"z_hit", s.laser.z_hit},
-                {"z_rand", s.laser.z_rand},
-                {"sigma_hit", s.laser.sigma_hit},
-                {"laser_likelihood_max_dist", s.laser.laser_likelihood_max_dist},
-                {"max_beams", s.laser.max_beams},
-                {"interpolation", to_string(s.laser.interpolation)}};
+  j["laser_model"] = to_string(s.laser_model);
+  if (s.laser_model == LaserModelKind::kBeam)
+    j["beam"] = {{"z_hit", s.beam.z_hit},         {"z_short", s.beam.z_short},
+                 {"z_max", s.beam.z_max},         {"z_rand", s.beam.z_rand},
+                 {"sigma_hit", s.beam.sigma_hit}, {"lambda_short", s.beam.lambda_short},
+                 {"max_beams", s.beam.max_beams}};
+  j["kld"] = s.kld.enabled
+                 ? nlohmann::json{{"kld_err", s.kld.kld_err},
+                                  {"kld_z", s.kld.kld_z},
+                                  {"min_particles", std::min(s.kld.min_particles, s.particles)},
+                                  {"max_particles", std::max(s.kld.max_particles, s.particles)}}
+                 : nlohmann::json(nullptr);
+  j["recovery"] = s.recovery.enabled
+                      ? nlohmann::json{{"source", "uniform"},
+                                       {"recovery_alpha_slow", s.recovery.recovery_alpha_slow},
+                                       {"recovery_alpha_fast", s.recovery.recovery_alpha_fast},
+                                       {"kidnap_probability", s.recovery.kidnap_probability}}
+                      : nlohmann::json(nullptr);
+  if (s.laser_model == LaserModelKind::kLikelihoodField)
+    j["laser"] = {{"z_hit", s.laser.z_hit},
+                  {"z_rand", s.laser.z_rand},
+                  {"sigma_hit", s.laser.sigma_hit},
+                  {"laser_likelihood_max_dist", s.laser.laser_likelihood_max_dist},
+                  {"max_beams", s.laser.max_beams},
+                  {"interpolation", to_string(s.laser.interpolation)}};
   j["update_min_d"] = s.data.update_min_d;
   j["update_min_a"] = s.data.update_min_a;
   j["position_rmse_m"] = to_json(r.position_rmse_m);
   j["heading_rmse_rad"] = to_json(r.heading_rmse_rad);
   j["cpu_us_per_update"] = to_json(r.cpu_us_per_update);
-  j["cpu_us_per_update_per_particle"] =
-      r.cpu_us_per_update.mean / static_cast<double>(std::max<std::size_t>(s.particles, 1));
+  j["cpu_us_per_update_per_particle"] = r.cpu_us_per_update.mean / std::max(r.particles.mean, 1.0);
   j["ess_fraction"] = to_json(r.ess_fraction);
+  j["particles_mean"] = to_json(r.particles);
   j["lost_runs"] = r.lost_runs;
   j["scored_updates"] = r.scored_updates;
   if (s.start == StartKind::kGlobal) {

@@ -31,7 +31,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "implicit/filter/kld.hpp"
 #include "implicit/filter/proposals.hpp"
+#include "implicit/filter/recovery.hpp"
+#include "implicit/robot/beam_model.hpp"
 #include "implicit/robot/laser_scan.hpp"
 #include "implicit/robot/likelihood_field.hpp"
 #include "implicit/robot/occupancy_grid.hpp"
@@ -50,16 +53,23 @@ enum class StartKind { kKnown, kGlobal };
 std::string_view to_string(StartKind s);
 StartKind parse_start(std::string_view text);
 
+/// The laser's observation model: the likelihood field (a distance field; differentiable, both
+/// proposals) or the beam model (ray casting; the bootstrap proposal only).
+enum class LaserModelKind { kLikelihoodField, kBeam };
+std::string_view to_string(LaserModelKind m);
+/// "likelihood-field" or "beam"; InvalidArgument otherwise.
+LaserModelKind parse_laser_model(std::string_view text);
+
 /// Interpolation of the distance field, from text ("nearest", "bilinear", "bicubic").
 robot::Interpolation parse_interpolation(std::string_view text);
 std::string_view to_string(robot::Interpolation i);
 
 /// A laser log prepared for localization: the updates, their reference poses and the map.
 struct LaserDataset {
-  std::string name;                      ///< the log's file name
-  std::vector<robot::LaserScan> scans;   ///< at the update points
-  std::vector<robot::Pose> reference;    ///< the robot's reference pose at each update
-  robot::LaserMount mount;               ///< the laser on the robot (from the log)
+  std::string name;                     ///< the log's file name
+  std::vector<robot::LaserScan> scans;  ///< at the update points
+  std::vector<robot::Pose> reference;   ///< the robot's reference pose at each update
+  robot::LaserMount mount;              ///< the laser on the robot (from the log)
   robot::OccupancyGrid map;
   std::size_t scans_in_log = 0;
   bool map_built = false;  ///< built from the reference poses (not read from a file)
@@ -78,11 +88,11 @@ struct LaserDataOptions {
   /// A map_server YAML; empty: a robot log's `map` record, or built from a CARMEN log's reference
   /// poses.
   std::filesystem::path map;
-  double map_resolution = 0.05;      ///< [m] of the built map
-  double map_max_range = 40.0;       ///< [m] beams longer than this only clear space in the built map
-  double update_min_d = 0.25;        ///< [m] nav2's update_min_d
-  double update_min_a = 0.2;         ///< [rad] nav2's update_min_a
-  std::size_t max_updates = 0;       ///< 0: all
+  double map_resolution = 0.05;  ///< [m] of the built map
+  double map_max_range = 40.0;   ///< [m] beams longer than this only clear space in the built map
+  double update_min_d = 0.25;    ///< [m] nav2's update_min_d
+  double update_min_a = 0.2;     ///< [rad] nav2's update_min_a
+  std::size_t max_updates = 0;   ///< 0: all
   void validate() const;
 };
 
@@ -109,7 +119,13 @@ struct LaserMclSettings {
   /// The synthesised odometry's noise, and the filter's motion model (the same by default).
   robot::OdometryAlphas odometry_noise{0.02, 0.02, 0.02, 0.02};
   robot::OdometryAlphas filter_alphas{0.02, 0.02, 0.02, 0.02};
-  robot::LikelihoodFieldParams laser;
+  LaserModelKind laser_model = LaserModelKind::kLikelihoodField;
+  robot::LikelihoodFieldParams laser;  ///< the likelihood field's parameters
+  robot::BeamModelParams beam;         ///< the beam model's parameters
+  filter::KldOptions kld;              ///< adaptive particle count (AMCL's bounds)
+  /// Injection of particles drawn uniformly over free space when the filter looks lost (AMCL's
+  /// recovery_alpha_slow / recovery_alpha_fast).
+  filter::RecoveryOptions recovery;
   double resample_threshold = 0.5;
   StartKind start = StartKind::kKnown;
   double initial_std_xy = 0.1;        ///< [m] a known start's spread
@@ -126,16 +142,16 @@ struct LaserMclSettings {
 /// One run of the filter over the log.
 struct LaserMclRun {
   std::uint64_t seed = 0;
-  double position_rmse_m = 0.0;   ///< over all updates
+  double position_rmse_m = 0.0;  ///< over all updates
   double heading_rmse_rad = 0.0;
   double final_error_m = 0.0;  ///< at the last scored update
   int scored_updates = 0;      ///< updates with a reference (truth); the metrics are NaN if 0
   bool lost = false;
-  bool global_success = false;    ///< global start only
-  int updates_to_converge = -1;   ///< global start: first update from which the error stays small
-  double ess_fraction_mean = 0.0;     ///< mean ESS / M at updates
+  bool global_success = false;     ///< global start only
+  int updates_to_converge = -1;    ///< global start: first update from which the error stays small
+  double ess_fraction_mean = 0.0;  ///< mean ESS / M at updates
   double particles_mean = 0.0;
-  double cpu_us_per_update = 0.0;     ///< process CPU time per update [us]
+  double cpu_us_per_update = 0.0;  ///< process CPU time per update [us]
   double newton_evaluations_mean = 0.0;
   int fallbacks = 0, failures = 0;
   std::vector<robot::Pose> estimates;  ///< per update (keep_tracks)
@@ -158,6 +174,7 @@ struct LaserMclResult {
   std::size_t scored_updates = 0;  ///< over all runs
   std::vector<LaserMclRun> runs;
   MeanSe position_rmse_m, heading_rmse_rad, cpu_us_per_update, ess_fraction;
+  MeanSe particles;  ///< mean particle count over updates (varies under KLD-sampling)
   int lost_runs = 0;
   double global_success_rate = 0.0;  ///< global start only
   double seconds = 0.0;              ///< wall time of all runs

@@ -163,11 +163,10 @@ PreparedScan LikelihoodFieldModel::prepare(const LaserScan& scan, std::string_vi
   // nav2's subsampling: max_beams beams evenly spaced from the first to the last.
   const std::size_t n = scan.size();
   const std::size_t used = std::min<std::size_t>(n, static_cast<std::size_t>(p_.max_beams));
-  const double step = used > 1 ? static_cast<double>(n - 1) / static_cast<double>(used - 1) : 0.0;
   const double mc = std::cos(mount_.yaw), ms = std::sin(mount_.yaw);
   z.end_points.reserve(used);
   for (std::size_t k = 0; k < used; ++k) {
-    const auto i = static_cast<std::size_t>(std::lround(static_cast<double>(k) * step));
+    const std::size_t i = evenly_spaced_beam(k, used, n);
     const double r = scan.ranges[i];
     if (r >= z.z_max || r >= scan.range_max) {
       ++z.skipped_no_return;

@@ -92,6 +92,12 @@ TEST(LaserMclCli, BadFlagValuesAreUsageErrorsNamingTheFlag) {
       {"--starts 0", 2, "--starts"},
       {"--starts 65", 2, "--starts"},
       {"--starts 1.5", 2, "--starts"},
+      {"--laser-model sonar", 2, "--laser-model"},
+      {"--z-short -1", 2, "--z-short"},
+      {"--z-max nan", 2, "--z-max"},
+      {"--lambda-short 0", 2, "--lambda-short"},
+      {"--kld-err 0", 2, "--kld-err"},
+      {"--recovery sometimes", 2, "--recovery"},
   };
   for (const BadRow& row : rows) {
     const auto r = run_cli(laser(row.args));
@@ -122,6 +128,9 @@ TEST(LaserMclCli, FilesAndModelsThatDoNotFitExit1NamingThem) {
       {laser("--interpolation nearest"), 1, "nearest"},
       {laser("--init global --global-updates 20"), 1, "global start needs more than 20"},
       {laser("--trajectory /proc/no/such/estimate.tum"), 1, "estimate.tum"},
+      {laser("--laser-model beam"), 1, "the beam model has none"},
+      {laser("--recovery mixture"), 1, "--recovery mixture"},
+      {laser("--kidnap-at 5"), 1, "--kidnap-at"},
   };
   for (const BadRow& row : rows) {
     const auto r = run_cli(row.args);
@@ -133,6 +142,26 @@ TEST(LaserMclCli, FilesAndModelsThatDoNotFitExit1NamingThem) {
       run_cli(laser("--method standard --aggregation cubed-sum "
                     "--interpolation nearest --json"));
   EXPECT_EQ(parity.code, 0) << parity.err;
+}
+
+TEST(LaserMclCli, BeamModelKldAndRecoveryRunAndSayHowInTheJson) {
+  const auto r = run_cli(laser("--method standard --laser-model beam --kld --recovery uniform "
+                               "--json --threads 1"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["laser_model"], "beam");
+  EXPECT_TRUE(j.contains("beam") && !j.contains("laser"));
+  EXPECT_EQ(j["beam"]["z_short"], 0.05);
+  EXPECT_EQ(j["kld"]["min_particles"], 20);  // the first count bounds KLD-sampling's minimum
+  EXPECT_EQ(j["recovery"]["source"], "uniform");
+  const double rmse = j["position_rmse_m"]["mean"].get<double>();
+  EXPECT_TRUE(std::isfinite(rmse) && rmse > 0.0) << rmse;
+  // Without the flags the JSON says there was none.
+  const auto plain = run_cli(laser("--json --threads 1"));
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  const auto k = nlohmann::json::parse(plain.out);
+  EXPECT_EQ(k["laser_model"], "likelihood-field");
+  EXPECT_TRUE(k["kld"].is_null() && k["recovery"].is_null());
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/filter/monte_carlo_localization.hpp"
+#include "implicit/robot/beam_model.hpp"
 #include "implicit/robot/distance_field.hpp"
 #include "implicit/robot/likelihood_field.hpp"
 #include "implicit/robot/scan_simulation.hpp"
@@ -206,6 +207,30 @@ TEST(LaserMcl, BothProposalsTrackASimulatedDrive) {
   const Drive d = simulate_drive(s, 30);
   expect_tracks(s, d, BootstrapProposal{}, 400);
   expect_tracks(s, d, ImplicitProposal{}, 50);
+}
+
+TEST(LaserMcl, TheBeamModelTracksASimulatedDriveWithTheBootstrapProposal) {
+  LaserSetup s;
+  const Drive d = simulate_drive(s, 30);
+  robot::BeamModelParams p;
+  p.max_beams = 24;
+  const robot::BeamModel beam(std::make_shared<const robot::OccupancyGrid>(s.grid), p);
+  FilterOptions o;
+  o.particles = 400;
+  o.seed = 5;
+  MonteCarloLocalization pf(IncrementModel{}, beam, BootstrapProposal{}, o);
+  pf.initialize(Pose(1.2, 1.0, 0.0), Mat3(Vec<3>(0.01, 0.01, 0.001).asDiagonal()));
+  for (std::size_t n = 0; n < d.scans.size(); ++n) {
+    const StepSummary& r = pf.step(d.odometry[n], d.scans[n]);
+    const Vec<2> e = r.mean.head<2>() - d.truth[n].head<2>();
+    // The same consistency bound as for the likelihood field (expect_tracks).
+    const double d2 = e.dot(r.covariance.topLeftCorner<2, 2>().ldlt().solve(e));
+    EXPECT_LT(d2, 2.0 * std::log(1000.0 * static_cast<double>(d.scans.size())))
+        << "step " << n << " error " << e.norm();
+  }
+  // The beam model has no derivatives: MonteCarloLocalization<..., BeamModel, ImplicitProposal>
+  // does not compile (a static_assert names the reason), so there is nothing to refuse at run time.
+  static_assert(!robot::DifferentiableObservationModel<robot::BeamModel>);
 }
 
 TEST(LaserMcl, ResultsAreBitIdenticalForAnyThreadCount) {

@@ -59,6 +59,13 @@ struct LaserScan {
   }
 };
 
+/// nav2's beam subsampling: of a scan's n beams, `used` (<= n) evenly spaced from the first to
+/// the last; the index of the k-th of them. Every laser model selects its beams this way.
+inline std::size_t evenly_spaced_beam(std::size_t k, std::size_t used, std::size_t n) {
+  const double step = used > 1 ? static_cast<double>(n - 1) / static_cast<double>(used - 1) : 0.0;
+  return static_cast<std::size_t>(std::lround(static_cast<double>(k) * step));
+}
+
 /// Where the laser sits on the robot: its pose (x forward [m], y left [m], yaw [rad]) in the
 /// robot's frame. The end point of beam i at robot pose x is x ⊕ mount ⊕ (r cos b, r sin b).
 struct LaserMount {
