@@ -38,8 +38,9 @@ namespace {
 
 using nlohmann::json;
 
-const std::vector<std::string> kExperiments = {"slit", "arm",           "himmelblau",         "mcl",
-                                               "slam", "proposal_gain", "global_localization"};
+const std::vector<std::string> kExperiments = {
+    "slit", "arm",           "himmelblau",          "mcl",
+    "slam", "proposal_gain", "global_localization", "laser_mcl"};
 
 struct ReproduceOptions {
   bool quick = false;
@@ -159,8 +160,9 @@ struct FigureSpec {
   std::string experiment;
 };
 const std::vector<FigureSpec> kFigures = {
-    {1, "slit"}, {2, "slit"}, {4, "arm"},           {5, "himmelblau"},
-    {6, "mcl"},  {7, "slam"}, {8, "proposal_gain"}, {9, "global_localization"}};
+    {1, "slit"},      {2, "slit"}, {4, "arm"},           {5, "himmelblau"},
+    {6, "mcl"},       {7, "slam"}, {8, "proposal_gain"}, {9, "global_localization"},
+    {10, "laser_mcl"}};
 
 // The plot scripts: $IMPLICIT_PLOTS_DIR, else <prefix>/share/implicit/plots of the install (or the
 // build tree's link to python/plots). Empty, with the reason in `error`, when there are none: the

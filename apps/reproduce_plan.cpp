@@ -266,6 +266,7 @@ Plan make_plan(bool quick, const std::vector<std::string>& only) {
                             [s](const RunContext& ctx) { return run_proposal_gain(s, ctx); }});
   }
   if (selected("global_localization")) add_global_localization(plan, quick);
+  if (selected("laser_mcl")) add_laser_mcl(plan, quick);
   return plan;
 }
 

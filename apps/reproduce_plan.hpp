@@ -30,4 +30,7 @@ struct Plan {
 /// experiments named in `only` (all when empty).
 Plan make_plan(bool quick, const std::vector<std::string>& only);
 
+/// Adds the laser_mcl experiment (apps/reproduce_laser.cpp): laser MCL on the bundled ACES log.
+void add_laser_mcl(Plan& plan, bool quick);
+
 }  // namespace implicit::app

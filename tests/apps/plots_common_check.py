@@ -1,4 +1,5 @@
-"""Checks python/plots/common.py: bad figure data fails loudly, naming file, line and column.
+"""Checks python/plots/common.py: bad figure data fails loudly, naming file, line and column; and
+figure10.py (the laser figure) on synthetic data.
 
 Usage: plots_common_check.py PLOTS_DIR TMP_DIR   (exit 0 when every check passes)
 """
@@ -48,4 +49,32 @@ assert r.returncode == 1, (r.returncode, r.stderr)
 assert "bad_number.csv:3" in r.stderr and "figure99.py: error" in r.stderr, r.stderr
 r = subprocess.run([sys.executable, str(script), str(tmp / "nope")], capture_output=True, text=True)
 assert r.returncode == 2, (r.returncode, r.stderr)
+
+# figure10.py on a small synthetic laser run: it draws both panels (an exact zero error included,
+# which the log axis must survive); a map whose cells disagree on the resolution is an error
+# naming the file and the column.
+laser = tmp / "figure10"
+laser.mkdir()
+(laser / "laser_mcl_map.csv").write_text(
+    "x_m,y_m,resolution_m\n" +
+    "".join(f"{0.05 * i:.3f},{y},0.05\n" for i in range(40) for y in (0.0, 1.0)))
+(laser / "laser_mcl_reference.csv").write_text(
+    "update,time_s,x_m,y_m,heading_rad\n" +
+    "".join(f"{k},{0.5 * k},{0.1 * k},0.5,0\n" for k in range(20)))
+for proposal, m, scale in (("implicit", 100, 0.01), ("bootstrap", 1000, 0.2)):
+    (laser / f"laser_mcl_track_{proposal}.csv").write_text(
+        "update,time_s,x_m,y_m,heading_rad,error_m,particles\n" +
+        "".join(f"{k},{0.5 * k},{0.1 * k},{0.5 + scale * k / 20},0,{scale * k / 20},{m}\n"
+                for k in range(20)))
+figure10 = plots / "figure10.py"
+r = subprocess.run([sys.executable, str(figure10), str(laser)], capture_output=True, text=True)
+assert r.returncode == 0, (r.returncode, r.stderr)
+assert (laser / "figure10.png").is_file() and (laser / "figure10.svg").is_file()
+(laser / "figure10.png").unlink()
+with open(laser / "laser_mcl_map.csv", "a") as f:
+    f.write("3.0,0.0,0.1\n")
+r = subprocess.run([sys.executable, str(figure10), str(laser)], capture_output=True, text=True)
+assert r.returncode == 1, (r.returncode, r.stderr)
+assert "laser_mcl_map.csv" in r.stderr and "resolution_m" in r.stderr, r.stderr
+assert not (laser / "figure10.png").exists()
 print("ok")

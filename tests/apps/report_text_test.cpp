@@ -4,7 +4,7 @@
 // The keys are recorded while reports are built from the results.json of the fuzzing corpus and
 // from variants of it that take the branches the corpus file does not (a figure drawn, full
 // settings, a failed run without a message, a 400-run Himmelblau row, our Table 4 CSV readable
-// and not, the proposal-gain tables).
+// and not, the proposal-gain tables, the laser tables with a run that failed).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -50,6 +50,38 @@ json variant(json results) {
          {"settings", json::object()},
          {"status", "ok"},
          {"result", {{"points", json::array()}, {"carpark_ratio", {{"A", 0.5}}}}}}}}};
+  // laser_mcl: a tracking and a global configuration that ran, and one that failed.
+  const json summary = {{"mean", 0.1}, {"se", 0.01}, {"median", 0.1}};
+  results["experiments"]["laser_mcl"] = {
+      {"status", "partial"},
+      {"runs",
+       {{{"label", "laser tracking implicit M=25"},
+         {"settings", {{"proposal", "implicit"}, {"particles", 25}, {"start", "known"}}},
+         {"status", "ok"},
+         {"result",
+          {{"data", "aces-corrected.log.gz"},
+           {"runs", 2},
+           {"scans_in_log", 440},
+           {"updates", 40},
+           {"map", {{"width", 100}, {"height", 80}, {"resolution", 0.05}}},
+           {"dataset", {{"load_seconds", 0.5}, {"from_cache", false}}},
+           {"position_rmse_m", summary},
+           {"ess_fraction", summary},
+           {"cpu_us_per_update", summary},
+           {"cpu_us_per_update_per_particle", 2.0},
+           {"lost_runs", 0}}}},
+        {{"label", "laser global bootstrap M=1000"},
+         {"settings", {{"proposal", "bootstrap"}, {"particles", 1000}, {"start", "global"}}},
+         {"status", "ok"},
+         {"result",
+          {{"runs", 2},
+           {"global_successes", 1},
+           {"updates_to_converge_median", 3},
+           {"cpu_us_per_update", summary}}}},
+        {{"label", "laser global implicit M=200"},
+         {"settings", {{"proposal", "implicit"}, {"particles", 200}, {"start", "global"}}},
+         {"status", "failed"},
+         {"error", "no such file"}}}}};
   return results;
 }
 

@@ -31,8 +31,9 @@ bool require_all() {
 
 // Which figures and table files each experiment produces.
 const std::map<std::string, std::vector<int>> kFigures = {
-    {"slit", {1, 2}}, {"arm", {4}},  {"himmelblau", {5}},
-    {"mcl", {6}},     {"slam", {7}}, {"global_localization", {9}}};
+    {"slit", {1, 2}},   {"arm", {4}},  {"himmelblau", {5}},
+    {"mcl", {6}},       {"slam", {7}}, {"global_localization", {9}},
+    {"laser_mcl", {10}}};
 const std::map<std::string, std::string> kTables = {{"slit", "table2_slit.csv"},
                                                     {"himmelblau", "table4_himmelblau.csv"},
                                                     {"mcl", "table5_mcl.csv"},
@@ -76,7 +77,8 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
   EXPECT_NE(html.find("</html>"), std::string::npos);
   for (const char* heading :
        {"Table 2", "Table 4", "Table 5", "Table 6", "Summary", "How to repeat this run",
-        "Beyond the paper: global localization and kidnapping"}) {
+        "Beyond the paper: global localization and kidnapping",
+        "Beyond the paper: laser localization on a recorded log"}) {
     EXPECT_NE(md.find(heading), std::string::npos) << heading;
     EXPECT_NE(html.find(heading), std::string::npos) << heading;
   }
@@ -143,6 +145,22 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
       EXPECT_TRUE(std::filesystem::exists(dir.path() / (key + ".svg"))) << key;
       EXPECT_NE(html.find("<img src=\"" + key + ".png\""), std::string::npos) << key;
     }
+  }
+
+  // laser_mcl: the figure's files (the first run of each proposal over the quick run's 40
+  // updates), and one load of the log for all its configurations.
+  if (results["experiments"]["laser_mcl"].value("status", "") == "ok") {
+    for (const char* f : {"laser_mcl_map.csv", "laser_mcl_reference.csv",
+                          "laser_mcl_track_implicit.csv", "laser_mcl_track_bootstrap.csv"})
+      EXPECT_TRUE(std::filesystem::exists(dir.path() / f)) << f;
+    EXPECT_EQ(data_rows(dir.path() / "laser_mcl_reference.csv"), 40);
+    EXPECT_EQ(data_rows(dir.path() / "laser_mcl_track_implicit.csv"), 40);
+    int loads = 0;
+    for (const auto& run : results["experiments"]["laser_mcl"]["runs"]) {
+      EXPECT_EQ(run["result"]["updates"], 40) << run["label"];
+      loads += run["result"]["dataset"]["from_cache"] == false ? 1 : 0;
+    }
+    EXPECT_EQ(loads, 1);
   }
 
   // The report can be rebuilt from results.json alone.

@@ -1,0 +1,101 @@
+#!/usr/bin/python3
+"""Figure 10 (beyond the paper): laser localization on the ACES log, implicit against bootstrap MCL.
+
+Usage: /usr/bin/python3 python/plots/figure10.py <dir>
+
+Reads, as `implicit reproduce --only laser_mcl --out <dir>` writes them
+(experiments/laser_reproduce.hpp):
+  laser_mcl_map.csv                 x_m,y_m,resolution_m: centres of the map's occupied cells
+  laser_mcl_reference.csv           update,time_s,x_m,y_m,heading_rad: the reference poses
+  laser_mcl_track_implicit.csv      update,time_s,x_m,y_m,heading_rad,error_m,particles: the
+  laser_mcl_track_bootstrap.csv     first run of each proposal from a known start
+
+Left panel: the map with the reference path and both estimated paths. Right panel: the position
+error of both against the time since the first update, on a log axis (one y-range for both).
+Writes <dir>/figure10.png and <dir>/figure10.svg.
+"""
+import numpy as np
+from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
+
+from common import COLORS, DataError, figure_main, load_csv, save, subplots
+
+PROPOSALS = (("implicit", "implicit MCL"), ("bootstrap", "bootstrap MCL"))
+# An exact zero error would leave the log axis; errors below a millimetre are drawn at it.
+ERROR_FLOOR = 1e-3
+
+
+# Cells per image pixel at most: a 5 cm wall is far below a pixel of the panel, so blocks of
+# cells are drawn occupied when any of their cells is.
+MAP_PIXELS = 500
+
+
+def map_image(cells, name):
+    """The occupied cells as an image (1 occupied, 0 not), pooled to about MAP_PIXELS across,
+    and its extent in metres."""
+    res = cells["resolution_m"]
+    if not np.all(np.isfinite(res)) or np.any(res <= 0) or np.ptp(res) > 0:
+        raise DataError(f"{name}: column 'resolution_m': expected one positive value in every "
+                        f"row, got {np.unique(res)[:5]}")
+    h = float(res[0])
+    x0, y0 = cells["x_m"].min(), cells["y_m"].min()
+    ix = np.rint((cells["x_m"] - x0) / h).astype(int)
+    iy = np.rint((cells["y_m"] - y0) / h).astype(int)
+    block = max(1, int(np.ceil(max(ix.max(), iy.max()) / MAP_PIXELS)))
+    ix, iy = ix // block, iy // block
+    image = np.zeros((iy.max() + 1, ix.max() + 1))
+    image[iy, ix] = 1.0
+    b = h * block
+    left, bottom = x0 - h / 2, y0 - h / 2
+    return image, (left, left + b * (ix.max() + 1), bottom, bottom + b * (iy.max() + 1))
+
+
+def draw(d):
+    cells = load_csv(d, "laser_mcl_map.csv", ["x_m", "y_m", "resolution_m"])
+    ref = load_csv(d, "laser_mcl_reference.csv", ["update", "time_s", "x_m", "y_m"])
+    tracks = {p: load_csv(d, f"laser_mcl_track_{p}.csv",
+                          ["update", "time_s", "x_m", "y_m", "error_m", "particles"])
+              for p, _ in PROPOSALS}
+    image, extent = map_image(cells, f"{d}/laser_mcl_map.csv")
+
+    fig, ax = subplots(1, 2, width=13, height=5.5)
+    a = ax[0]
+    a.imshow(image, origin="lower", extent=extent, cmap="Greys", vmin=0, vmax=1.2,
+             interpolation="nearest")
+    a.plot(ref["x_m"], ref["y_m"], color=COLORS["exact"], lw=2.5, alpha=0.6,
+           label="reference (corrected poses)")
+    for p, name in PROPOSALS:
+        t = tracks[p]
+        a.plot(t["x_m"], t["y_m"], color=COLORS["implicit" if p == "implicit" else "standard"],
+               lw=0.8, label=f"{name}, M = {int(t['particles'][0])}")
+    a.set_aspect("equal")
+    a.set_xlabel("x [m]")
+    a.set_ylabel("y [m]")
+    a.set_title("ACES map, reference and estimated paths (first run)")
+    a.legend(fontsize=7, loc="best")
+
+    a = ax[1]
+    top = 0.0
+    for p, name in PROPOSALS:
+        t = tracks[p]
+        e = np.maximum(t["error_m"], ERROR_FLOOR)
+        top = max(top, float(np.nanmax(e)))
+        a.plot(t["time_s"], e, color=COLORS["implicit" if p == "implicit" else "standard"],
+               lw=0.7, alpha=0.85, label=f"{name}, M = {int(t['particles'][0])}")
+    a.set_yscale("log")
+    # At least two decades with labels at 1, 2 and 5 of each, so the axis reads without counting
+    # minor ticks.
+    low = min(float(np.nanmin(np.maximum(tracks[p]["error_m"], ERROR_FLOOR))) for p, _ in PROPOSALS)
+    a.set_ylim(min(0.01, 0.8 * low), max(1.0, 1.5 * top))
+    a.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    a.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+    a.yaxis.set_minor_formatter(NullFormatter())
+    a.set_xlabel("time since the first update [s]")
+    a.set_ylabel("position error [m]")
+    a.set_title("position error against time (first run)")
+    a.grid(True, which="major", alpha=0.3)
+    a.legend(fontsize=7)
+    save(fig, d, 10)
+
+
+if __name__ == "__main__":
+    figure_main(draw)
