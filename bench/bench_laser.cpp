@@ -40,6 +40,7 @@
 #include "implicit/core/rng.hpp"
 #include "implicit/core/share_dir.hpp"
 #include "implicit/filter/monte_carlo_localization.hpp"
+#include "implicit/robot/beam_model.hpp"
 #include "implicit/robot/distance_field.hpp"
 #include "implicit/robot/likelihood_field.hpp"
 #include "implicit/robot/odometry_model.hpp"
@@ -449,6 +450,25 @@ void filter_update(benchmark::State& state, Interpolation mode) {
   state.SetLabel(s.label);
 }
 
+/// The beam model (ray casting per beam, the second laser model) on the same particles and scans,
+/// for comparison with the likelihood field: its cost grows with the length of the rays.
+void beam_log_likelihood(benchmark::State& state) {
+  const Scene& s = scene();
+  robot::BeamModelParams p;
+  p.max_beams = kBeams;
+  const robot::BeamModel model(std::make_shared<const robot::OccupancyGrid>(s.map), p, s.mount);
+  std::vector<robot::PreparedBeams> z;
+  for (const robot::LaserScan& scan : s.scans) z.push_back(model.prepare(scan, "scan"));
+  double sink = 0.0, beams = 0.0;
+  for (const robot::PreparedBeams& b : z) beams += static_cast<double>(b.size());
+  every_particle(state, [&](std::size_t k, std::size_t j) {
+    sink += model.log_likelihood(z[k], s.moved[k][j]);
+  });
+  benchmark::DoNotOptimize(sink);
+  state.counters["beams"] = beams / static_cast<double>(z.size());
+  state.SetLabel(s.label);
+}
+
 /// The one-time cost of nearest-cell interpolation: a new model's first prepare() tabulates the
 /// beam density over every cell of the field (padded Intel map: 2127 x 2056 cells).
 void nearest_table(benchmark::State& state) {
@@ -539,6 +559,7 @@ void register_all() {
   add("FilterUpdate/implicit/bicubic/current",
       filter_update<LikelihoodFieldModel, ImplicitProposal>, Interpolation::kBicubic);
   add("NearestTable/build/current", nearest_table);
+  add("LogLikelihood/beam-model/current", beam_log_likelihood);
 }
 
 }  // namespace

@@ -3,13 +3,17 @@
 // heading, and the first scan decides.
 //
 //   bootstrap: M poses drawn uniformly over the free cells, weighted by log p(z | x);
-//   implicit:  the multi-start mixture. M starts drawn as above; from each, Newton minimises
+//   implicit:  the multi-start mixture. 9M/10 starts: the best poses of an exhaustive search of
+//              log p(z | x) over a coarse grid of free space (0.25 m, 10 degrees); M/10 poses
+//              drawn uniformly as above (a defensive component). From each start, Newton minimises
 //              -log p(z | x) + 1/2 |x - start|^2 / s^2 (scan matching with a weak pull towards
 //              the start, s = 0.5 m and 0.5 rad) to mu_k with Hessian H_k; the sample x_k =
 //              mu_k + L_k^-T xi_k of each component is weighted by
-//              p(z | x_k) U(x_k) / q(x_k),  q = (1/M) sum_i N(x; mu_i, H_i^-1)
-//              (the deterministic-mixture weight: unbiased with one sample per component; U is
-//              the uniform prior over free space, so a sample off it weighs 0).
+//              p(z | x_k) U(x_k) / q(x_k),  q = (1/n) [sum_i N(x; mu_i, H_i^-1) + u U(x)]
+//              (the deterministic-mixture weight over the n usable draws, u of them uniform:
+//              unbiased with one sample per component; U is the uniform prior over free space,
+//              so a sample off it weighs 0). The starts depend on the scan, not on the draws,
+//              so the weights stay exact.
 
 #include <cstdint>
 #include <memory>
@@ -39,6 +43,10 @@ class FreeSpace {
   explicit FreeSpace(const robot::OccupancyGrid& map);
   robot::Pose draw(Rng& rng) const;
   bool contains(const robot::Pose& x) const;
+  /// log of the uniform density over free space and headings: -log(area * 2 pi).
+  double log_density() const;
+  const robot::OccupancyGrid& map() const { return *map_; }
+  const std::vector<Eigen::Vector2i>& cells() const { return cells_; }
 
  private:
   const robot::OccupancyGrid* map_;
