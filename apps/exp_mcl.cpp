@@ -236,6 +236,8 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   const auto t_start = setup.start;
   const double p = setup.p;
   LocalizationProblem problem = filter::make_problem(log, model.dt());
+  warn_skipped_scans("mcl", s.data_dir.empty() ? "data/carpark" : s.data_dir, problem.schedule,
+                     model.dt());
   std::string reference_cache;
   bool reference_from_cache = false;
   double reference_vs_gps = 0.0;  // RMS distance [m] between the reference track and the GPS
@@ -406,6 +408,8 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   j["detections_used"] = mean_of(used);
   j["detections_dropped"] = mean_of(dropped);
   j["scans_with_detections"] = problem.schedule.scans_with_observations;
+  j["scans_skipped"] = problem.schedule.scans_skipped;
+  j["detections_skipped"] = problem.schedule.observations_skipped;
   j["steps"] = problem.schedule.steps.size();
   j["lost_runs"] = lost;
   // Wilson 95 % interval of the lost fraction (wilson.hpp): compare intervals, not counts.

@@ -276,6 +276,13 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
                          model == "ute" ? robot::declare_vehicle(d.vehicle)
                                         : robot::VehicleDeclaration{model, {{"dt", d.vehicle.dt}}});
   }
+  for (const auto& d : logs)
+    if (d.detections_unscheduled > 0) {
+      robot::StepSchedule skipped;
+      skipped.scans_skipped = d.scans_unscheduled;
+      skipped.observations_skipped = d.detections_unscheduled;
+      warn_skipped_scans("slam", d.name, skipped, d.vehicle.dt);
+    }
   const auto k_runs = static_cast<std::size_t>(s.datasets);
   std::vector<RunSummary> runs(k_runs);
   Progress bar(fmt::format("SLAM {} M={}", s.method, particles), k_runs, ctx.show_progress());
@@ -382,7 +389,10 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["rmse_map_m"] = mean(rmse_m);
   j["rmse_map_m_std"] = stddev(rmse_m);
   j["landmarks_mean"] = mean(lms);
-  j["detections_skipped"] = skipped;
+  // Below min_range (per run, summed), and never scheduled (the log's, once per run).
+  j["detections_skipped"] =
+      skipped + static_cast<std::size_t>(data0.detections_unscheduled) * k_runs;
+  j["detections_unscheduled"] = data0.detections_unscheduled;
   j["map_bytes_mean"] = mean(mapbytes);
   if (!newton.empty()) j["newton_iterations_per_update"] = mean(newton);
   // NEES only means something when the truth follows the filter's model.

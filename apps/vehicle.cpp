@@ -65,6 +65,18 @@ void warn_vehicle_assumed(const std::string& command, const std::string& data_na
              used.model == "ute" ? ", the Car Park's car" : "");
 }
 
+void warn_skipped_scans(const std::string& command, const std::string& data_name,
+                        const robot::StepSchedule& schedule, double dt) {
+  if (schedule.observations_skipped == 0) return;
+  fmt::print(stderr,
+             "implicit {}: warning: {} detections in {} scans of '{}' are not used: each scan is "
+             "applied at the control nearest in time, if within half a step ({} s), and at most "
+             "one scan per control; write a control record at (or within {} s of) every scan's "
+             "time (\"detections_skipped\" in the JSON counts them)\n",
+             command, schedule.observations_skipped, schedule.scans_skipped, data_name, 0.5 * dt,
+             0.5 * dt);
+}
+
 robot::UteParams ute_params(const robot::RobotLog& log, const MotionNoise& noise,
                             robot::UteParams p) {
   return with_noise(log.vehicle ? robot::ute_params(*log.vehicle, p) : p, noise);

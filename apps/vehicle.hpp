@@ -21,6 +21,10 @@ std::string resolve_model(const std::string& command, const std::string& flag,
 /// A log that declares no vehicle runs as `used` (the Car Park's Ute unless --model says another
 /// model). Numbers of the wrong robot look like results, so this is said on stderr whatever
 /// --quiet and --json say, and the command's JSON records "vehicle_assumed": true.
+/// Says on stderr how many detections (in how many scans) the step schedule left out and how to
+/// keep them; nothing when none was.
+void warn_skipped_scans(const std::string& command, const std::string& data_name,
+                        const robot::StepSchedule& schedule, double dt);
 void warn_vehicle_assumed(const std::string& command, const std::string& data_name,
                           const robot::VehicleDeclaration& used);
 

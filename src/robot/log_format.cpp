@@ -477,15 +477,13 @@ StepSchedule make_schedule(const RobotLog& log, double start_time, double max_of
         best = static_cast<std::ptrdiff_t>(c);
       }
     }
-    if (best < 0 || best_dt > max_offset + 1e-9) {
+    const FilterStep* near = best < 0 ? nullptr : &s.steps[static_cast<std::size_t>(best)];
+    if (near == nullptr || best_dt > max_offset + 1e-9 || near->scan >= 0) {
       ++s.scans_skipped;
+      s.observations_skipped += static_cast<int>(log.scans[k].observations.size());
       continue;
     }
     FilterStep& step = s.steps[static_cast<std::size_t>(best)];
-    if (step.scan >= 0) {
-      ++s.scans_skipped;
-      continue;
-    }
     step.scan = static_cast<int>(k);
     ++s.scans_used;
     if (!log.scans[k].observations.empty()) ++s.scans_with_observations;

@@ -401,6 +401,8 @@ SlamDataset dataset_from_robot_log(const robot::RobotLog& log, const robot::UteP
     d.landmarks.push_back(log.landmarks.position(k));
   if (log.vehicle) d.vehicle_model = log.vehicle->model;
   const auto schedule = robot::make_schedule(log, log.initial->time, 0.5 * vehicle.dt);
+  d.scans_unscheduled = schedule.scans_skipped;
+  d.detections_unscheduled = schedule.observations_skipped;
   d.step_dt = robot::step_lengths(log, schedule, vehicle.dt);
   // Regular data keep the nominal step (and the Ute model itself, bit for bit).
   if (std::all_of(d.step_dt.begin(), d.step_dt.end(), [&](double t) { return t == vehicle.dt; }))

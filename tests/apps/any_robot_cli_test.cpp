@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <fstream>
 #include <string>
 
 #include "apps/cli_runner.hpp"
@@ -39,6 +40,33 @@ TEST(AnyRobotCli, TheCarParkIsAUteAndRefusesTheUnicycle) {
   const auto r = run_cli("mcl --model unicycle -M 10 --runs 1");
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("declares vehicle 'ute'"), std::string::npos) << r.err;
+}
+
+// A log whose scans come at four times the control rate: one scan per control is used, the rest
+// are counted and said (stderr and JSON), never dropped silently.
+TEST(AnyRobotCli, ScansTheScheduleLeavesOutAreCountedAndSaid) {
+  TempDir dir("skipped_scans");
+  const auto log = dir.path() / "fast_scans.log";
+  {
+    std::ofstream out(log);
+    out << "vehicle unicycle dt=0.1\nlandmark 1 5 0\nlandmark 2 5 3\n"
+        << "initial 0 0 0 0 0.1 0.1 0.01\n";
+    for (int k = 1; k <= 20; ++k) out << "control " << 0.1 * k << " 1 0\n";
+    // Two scans per control, 0.01 s and 0.02 s after it: the second finds its control taken.
+    for (int k = 1; k <= 19; ++k)
+      for (double offset : {0.01, 0.02})
+        out << "scan " << 0.1 * k + offset << " 2\nobs 5 1.5708 1\nobs 5.8 2.1 2\n";
+  }
+  for (const std::string command : {"mcl -M 20", "slam -M 20 --datasets 1"}) {
+    const auto r = run_cli(command + " --data '" + log.string() + "' --allow-empty --json");
+    ASSERT_EQ(r.code, 0) << command << "\n" << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["detections_skipped"], 38) << command;
+    EXPECT_NE(r.err.find("warning: 38 detections in 19 scans"), std::string::npos)
+        << command << "\n"
+        << r.err;
+    EXPECT_NE(r.err.find("within 0.05 s"), std::string::npos) << r.err;
+  }
 }
 
 TEST(AnyRobotCli, SimulateNeedsAnOutputFile) {

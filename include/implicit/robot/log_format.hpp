@@ -167,7 +167,9 @@ struct StepSchedule {
   std::vector<FilterStep> steps;
   int scans_used = 0;               ///< scans attached to a step
   int scans_with_observations = 0;  ///< attached scans with at least one observation
-  int scans_skipped = 0;            ///< scans farther than max_offset from every step
+  int scans_skipped = 0;            ///< scans farther than max_offset from every step, or second
+                                    ///< on a step
+  int observations_skipped = 0;     ///< observations in the skipped scans
   int observations_used = 0;        ///< observations in the attached scans
 };
 

@@ -52,6 +52,9 @@ struct SlamDataset {
   std::vector<std::uint8_t> truth_valid;  ///< per row: 1 when truth[n] is known (empty = all)
   bool truth_has_heading = true;          ///< false when the truth is a position fix (GPS)
   std::vector<Landmark> landmarks;        ///< true map (may be empty)
+  /// read_slam_log: scans the step schedule left out (farther than half a step from every
+  /// control, or a second scan on one control), and the detections in them.
+  int scans_unscheduled = 0, detections_unscheduled = 0;
 
   std::size_t steps() const { return controls.size(); }
   const Control& control(std::size_t n) const { return controls[n - 1]; }
