@@ -50,6 +50,19 @@ class LikelihoodField:
         angle_increment: float, range_min: float, range_max: float
     ) -> tuple[float, np.ndarray, np.ndarray]: ...
 
+class BeamModel:
+    def __init__(self, grid: OccupancyGrid, z_hit: float = 0.5, z_short: float = 0.05,
+                 z_max: float = 0.05, z_rand: float = 0.5, sigma_hit: float = 0.2,
+                 lambda_short: float = 0.1, max_beams: int = 60,
+                 laser_max_range: Optional[float] = None,
+                 laser_min_range: Optional[float] = None,
+                 mount: npt.ArrayLike = (0.0, 0.0, 0.0)) -> None: ...
+    @property
+    def differentiable(self) -> bool: ...
+    def log_likelihood(self, poses: npt.ArrayLike, ranges: npt.ArrayLike, angle_min: float,
+                       angle_increment: float, range_min: float,
+                       range_max: float) -> np.ndarray: ...
+
 class OdometryModel:
     def __init__(self, alpha1: float = 0.2, alpha2: float = 0.2, alpha3: float = 0.2,
                  alpha4: float = 0.2) -> None: ...
@@ -63,7 +76,8 @@ class OdometryModel:
 class ParticleFilter:
     def __init__(self, grid: OccupancyGrid, proposal: str = "implicit", particles: int = 100,
                  seed: int = 0, alphas: npt.ArrayLike = (0.2, 0.2, 0.2, 0.2),
-                 laser: Optional[dict[str, Any]] = None, resample_threshold: float = 0.5,
+                 laser: Union[dict[str, Any], BeamModel, None] = None,
+                 resample_threshold: float = 0.5,
                  starts: int = 2, **laser_keywords: Any) -> None: ...
     def initialize(self, mean: npt.ArrayLike, covariance: npt.ArrayLike) -> None: ...
     def step(self, u: npt.ArrayLike, ranges: Optional[npt.ArrayLike] = None,
@@ -84,9 +98,13 @@ def run(data: Path, proposal: str = "implicit", particles: int = 100, runs: int 
         z_hit: float = 0.5, z_rand: float = 0.5, sigma_hit: float = 0.2, max_dist: float = 2.0,
         max_beams: int = 60, laser_max_range: Optional[float] = None,
         interpolation: str = "bicubic", aggregation: str = "product",
+        laser_model: str = "likelihood-field", z_short: float = 0.05, z_max: float = 0.05,
+        lambda_short: float = 0.1,
         update_min_d: float = 0.25, update_min_a: float = 0.2, map_resolution: float = 0.05,
-        global_updates: int = 10, global_radius: float = 0.5, tracks: bool = False,
-        threads: int = 0,
+        global_updates: int = 10, global_radius: float = 0.5, kld: bool = False,
+        kld_err: float = 0.01, kld_z: float = 0.99, recovery: str = "none",
+        recovery_alpha_slow: float = 0.001, recovery_alpha_fast: float = 0.1,
+        kidnap_probability: float = 1e-3, tracks: bool = False, threads: int = 0,
         progress: Optional[Callable[[int, int], Any]] = None) -> dict[str, Any]: ...
 def _run(settings: dict[str, Any],
          progress: Optional[Callable[[int, int], Any]] = None) -> str: ...

@@ -1,6 +1,6 @@
 // implicit.laser: occupancy grids to and from numpy, map files, CARMEN logs, mapping with known
-// poses, simulated scans, the likelihood-field model and the odometry motion model. The filter
-// and the one-call run are in laser_filter.cpp.
+// poses, simulated scans, the likelihood-field model and the odometry motion model. The beam
+// model is in laser_beam.cpp, the filter and the one-call run in laser_filter.cpp.
 
 #include <cmath>
 #include <limits>
@@ -9,7 +9,6 @@
 
 #include <fmt/format.h>
 
-#include "implicit/core/parallel.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/share_dir.hpp"
 #include "implicit/robot/carmen.hpp"
@@ -324,18 +323,8 @@ void bind_field(py::module_& m) {
           [](const PyLikelihoodField& f, const py::object& poses, const py::object& ranges,
              const py::object& angle_min, const py::object& angle_increment,
              const py::object& range_min, const py::object& range_max) {
-            const Array x = require_shape(poses, "poses", {-1, 3});
-            const robot::PreparedScan z =
-                f.model.prepare(scan_arg(ranges, angle_min, angle_increment, range_min, range_max));
-            std::vector<double> out(static_cast<std::size_t>(x.shape(0)));
-            const double* p = x.data();
-            {
-              py::gil_scoped_release unlocked;
-              parallel_for(out.size(), [&](std::size_t k) {
-                out[k] = f.model.log_likelihood(z, Pose(p[3 * k], p[3 * k + 1], p[3 * k + 2]));
-              });
-            }
-            return adopt_vector(std::move(out));
+            return log_likelihoods(
+                f.model, poses, scan_arg(ranges, angle_min, angle_increment, range_min, range_max));
           },
           py::arg("poses"), py::arg("ranges"), py::arg("angle_min"), py::arg("angle_increment"),
           py::arg("range_min"), py::arg("range_max"),
@@ -448,6 +437,7 @@ void init_laser(py::module_& m) {
   laser::bind_files(m);
   laser::bind_mapping(m);
   laser::bind_field(m);
+  laser::bind_beam(m);
   laser::bind_odometry(m);
   laser::init_laser_filter(m);
 }

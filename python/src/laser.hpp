@@ -1,6 +1,7 @@
 #pragma once
 // Shared by the laser bindings (laser.cpp: grids, maps, logs, the likelihood field and the
-// odometry model; laser_filter.cpp: the steppable filter and the one-call run). Python hands
+// odometry model; laser_beam.cpp: the beam model; laser_filter.cpp: the steppable filter and the
+// one-call run). Python hands
 // over loosely typed objects: every argument is converted here, and a bad one raises
 // InvalidArgument naming it, before any C++ object sees it.
 
@@ -11,6 +12,8 @@
 #include <vector>
 
 #include "common.hpp"
+#include "implicit/core/parallel.hpp"
+#include "implicit/robot/beam_model.hpp"
 #include "implicit/robot/laser_scan.hpp"
 #include "implicit/robot/likelihood_field.hpp"
 #include "implicit/robot/occupancy_grid.hpp"
@@ -68,10 +71,41 @@ LaserSpec laser_spec(const py::dict& kw, const std::string& where);
 /// The keywords of LikelihoodField, for messages.
 extern const char* const kLaserKeywords;
 
+/// The beam model's settings as Python passes them (keywords of BeamModel).
+struct BeamSpec {
+  robot::BeamModelParams params;
+  robot::LaserMount mount;
+};
+/// Reads the BeamModel keywords from `kw` (missing ones keep their defaults); a key that is not
+/// one of them is refused, naming `where`.
+BeamSpec beam_spec(const py::dict& kw, const std::string& where);
+/// The keywords of BeamModel, for messages.
+extern const char* const kBeamKeywords;
+
+/// log p(scan | x) (N,) of a laser model for each robot pose x of `poses` (N, 3): the scan is
+/// prepared once, the poses are scored in parallel without the interpreter's lock.
+template <typename Model>
+py::array_t<double> log_likelihoods(const Model& model, const py::handle& poses,
+                                    const robot::LaserScan& scan) {
+  const Array x = require_shape(poses, "poses", {-1, 3});
+  const typename Model::Prepared z = model.prepare(scan);
+  std::vector<double> out(static_cast<std::size_t>(x.shape(0)));
+  const double* p = x.data();
+  {
+    py::gil_scoped_release unlocked;
+    parallel_for(out.size(), [&](std::size_t k) {
+      out[k] = model.log_likelihood(z, robot::Pose(p[3 * k], p[3 * k + 1], p[3 * k + 2]));
+    });
+  }
+  return adopt_vector(std::move(out));
+}
+
 /// The Interpolation named by text (the name of the argument in messages: "interpolation").
 robot::Interpolation interpolation_arg(const py::handle& o, const std::string& name);
 robot::BeamAggregation aggregation_arg(const py::handle& o, const std::string& name);
 
+/// implicit.laser.BeamModel (laser_beam.cpp).
+void bind_beam(py::module_& m);
 /// implicit.laser.ParticleFilter and implicit.laser.run (laser_filter.cpp).
 void init_laser_filter(py::module_& m);
 

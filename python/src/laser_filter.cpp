@@ -1,14 +1,17 @@
-// implicit.laser.ParticleFilter (laser Monte Carlo localization stepped from Python) and
-// implicit.laser._run, the experiment of `implicit mcl --sensor laser` (experiments/laser_mcl.hpp)
-// called with the same settings struct, so that its numbers are the tool's.
+// implicit.laser.ParticleFilter (laser Monte Carlo localization stepped from Python, on the
+// likelihood field or the beam model) and implicit.laser._run, the experiment of `implicit mcl
+// --sensor laser` (experiments/laser_mcl.hpp) called with the same settings struct, so that its
+// numbers are the tool's.
 
 #include <Python.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <span>
 
+#include <fmt/format.h>
 #include <Eigen/Cholesky>
 #include <nlohmann/json.hpp>
 
@@ -23,6 +26,14 @@ namespace {
 
 using robot::Mat3;
 using robot::Pose;
+
+/// The implicit proposal on the beam model, refused as the tool refuses it (LaserMclSettings::
+/// validate), in Python's names. The C++ filter would not even compile it (the beam model has no
+/// negative_log_likelihood), so the refusal has to come before.
+constexpr const char* kBeamNeedsBootstrap =
+    "proposal: the implicit proposal needs an observation model with derivatives, and the beam "
+    "model has none (its expected range comes from ray casting, a step function of the pose); "
+    "use proposal='bootstrap', or the likelihood field for the implicit proposal";
 
 /// The implicit proposal needs the model's gradient; say which argument takes it away.
 void require_differentiable(bool implicit, const robot::LikelihoodFieldParams& p) {
@@ -47,10 +58,10 @@ class AnyLaserFilter {
   virtual const filter::StepSummary& last() const = 0;
 };
 
-template <typename Proposal>
+template <typename Model, typename Proposal>
 class LaserFilterOf final : public AnyLaserFilter {
  public:
-  LaserFilterOf(robot::OdometryModel motion, robot::LikelihoodFieldModel model, Proposal proposal,
+  LaserFilterOf(robot::OdometryModel motion, Model model, Proposal proposal,
                 filter::FilterOptions o)
       : pf_(std::move(motion), std::move(model), std::move(proposal), o) {}
   void initialize(const Pose& mean, const Mat3& cov) override { pf_.initialize(mean, cov); }
@@ -61,13 +72,39 @@ class LaserFilterOf final : public AnyLaserFilter {
   const filter::StepSummary& last() const override { return pf_.last(); }
 
  private:
-  filter::MonteCarloLocalization<robot::OdometryModel, robot::LikelihoodFieldModel, Proposal> pf_;
+  filter::MonteCarloLocalization<robot::OdometryModel, Model, Proposal> pf_;
 };
 
 struct PyLaserFilter {
   std::unique_ptr<AnyLaserFilter> f;
   bool initialized = false;
 };
+
+bool same_grid(const robot::OccupancyGrid& a, const robot::OccupancyGrid& b) {
+  return a.width() == b.width() && a.height() == b.height() && a.resolution() == b.resolution() &&
+         a.origin() == b.origin() && std::ranges::equal(a.data(), b.data());
+}
+
+/// The filter on a BeamModel: the bootstrap proposal only, and the model's own parameters.
+PyLaserFilter beam_filter(const robot::OccupancyGrid& g, const robot::BeamModel& beam,
+                          bool implicit, const robot::OdometryModel& motion,
+                          const filter::FilterOptions& o, const py::kwargs& kw) {
+  require(!implicit, kBeamNeedsBootstrap);
+  for (const auto& item : kw)
+    throw InvalidArgument(fmt::format(
+        "laser: '{}' is a LikelihoodField keyword, and laser is a BeamModel (give the beam "
+        "model's parameters when building it)",
+        printable(std::string(py::str(item.first)))));
+  require(same_grid(g, beam.map()),
+          "laser: expected a BeamModel built on grid, got one on another map ({} x {} cells of "
+          "{} m; grid: {} x {} of {} m, or other cells)",
+          beam.map().width(), beam.map().height(), beam.map().resolution(), g.width(), g.height(),
+          g.resolution());
+  PyLaserFilter p;
+  p.f = std::make_unique<LaserFilterOf<robot::BeamModel, filter::BootstrapProposal>>(
+      motion, beam, filter::BootstrapProposal{}, o);
+  return p;
+}
 
 PyLaserFilter make_filter(const py::object& grid, const py::object& proposal,
                           const py::object& particles, const py::object& seed,
@@ -81,11 +118,13 @@ PyLaserFilter make_filter(const py::object& grid, const py::object& proposal,
   o.seed = static_cast<std::uint64_t>(int_arg(seed, "seed", 0, kMaxInt));
   o.resample_threshold = number_arg(resample_threshold, "resample_threshold", 0.0, 1.0);
   const robot::OdometryModel motion(alphas_arg(alphas, "alphas"));
+  if (py::isinstance<robot::BeamModel>(laser))
+    return beam_filter(g, laser.cast<const robot::BeamModel&>(), implicit, motion, o, kw);
   // The field's keywords come in the dict `laser`, as keywords of the call, or both.
   py::dict merged;
   if (!laser.is_none()) {
     require(py::isinstance<py::dict>(laser),
-            "laser: expected a dict of LikelihoodField keywords ({}) or None, got {}",
+            "laser: expected a dict of LikelihoodField keywords ({}), a BeamModel or None, got {}",
             kLaserKeywords, type_name(laser));
     merged = py::dict(laser);
   }
@@ -102,10 +141,12 @@ PyLaserFilter make_filter(const py::object& grid, const py::object& proposal,
   filter::ImplicitProposal newton;
   newton.starts = static_cast<int>(int_arg(starts, "starts", 1, 64));
   PyLaserFilter p;
+  using Field = robot::LikelihoodFieldModel;
   if (implicit)
-    p.f = std::make_unique<LaserFilterOf<filter::ImplicitProposal>>(motion, model, newton, o);
+    p.f =
+        std::make_unique<LaserFilterOf<Field, filter::ImplicitProposal>>(motion, model, newton, o);
   else
-    p.f = std::make_unique<LaserFilterOf<filter::BootstrapProposal>>(
+    p.f = std::make_unique<LaserFilterOf<Field, filter::BootstrapProposal>>(
         motion, model, filter::BootstrapProposal{}, o);
   return p;
 }
@@ -148,7 +189,8 @@ Mat3 covariance_arg(const py::handle& o, const std::string& name) {
 
 constexpr const char* kFilterDoc = R"doc(
 Monte Carlo localization with a laser on an occupancy grid, stepped from Python: the odometry
-motion model and the likelihood field, with the implicit or the bootstrap proposal.
+motion model and the likelihood field, with the implicit or the bootstrap proposal, or the beam
+model with the bootstrap proposal.
 
 ParticleFilter(grid, proposal="implicit", particles=100, seed=0, alphas=(0.2, 0.2, 0.2, 0.2),
                laser=None, resample_threshold=0.5, starts=2, **laser_keywords)
@@ -160,7 +202,9 @@ Args:
     seed: particle j at step n draws from the stream (seed, n, j): the same for any thread count.
     alphas: alpha1..alpha4 of the odometry model.
     laser: a dict of LikelihoodField keywords (z_hit, z_rand, sigma_hit, max_dist, max_beams,
-        interpolation, aggregation, mount); they may also be given as keywords of the call.
+        interpolation, aggregation, mount); they may also be given as keywords of the call. Or
+        an implicit.laser.BeamModel built on grid: the filter weights by the beam model (with
+        proposal="bootstrap": the implicit proposal needs derivatives the beam model has not).
     resample_threshold: resample when ESS < threshold * M.
     starts: the implicit proposal's Newton starts per particle: the prediction and starts - 1
         draws from the motion prior; the lowest minimum centres the proposal (weights stay
@@ -178,7 +222,9 @@ Example::
 
     pf = implicit.laser.ParticleFilter(grid, particles=200, seed=1, sigma_hit=0.1)
     pf.initialize([1.0, 1.0, 0.0], np.diag([0.01, 0.01, 0.003]))
-    r = pf.step([0.2, 0.0, 0.0], **implicit.laser.simulate_scan(grid, [1.2, 1.0, 0.0])))doc";
+    r = pf.step([0.2, 0.0, 0.0], **implicit.laser.simulate_scan(grid, [1.2, 1.0, 0.0]))
+    beam = implicit.laser.ParticleFilter(grid, proposal="bootstrap",
+                                         laser=implicit.laser.BeamModel(grid, sigma_hit=0.1)))doc";
 
 void bind_filter(py::module_& m) {
   py::class_<PyLaserFilter>(m, "ParticleFilter", kFilterDoc)
@@ -245,11 +291,71 @@ void bind_filter(py::module_& m) {
           "The summary dict of the last step (of initialize before any step).");
 }
 
-std::string run(const py::dict& kw, const py::object& progress) {
-  const auto arg = [&](const char* key) -> py::object {
+/// The settings dict implicit.laser.run passes: every key is present.
+struct RunArgs {
+  const py::dict& kw;
+  py::object operator()(const char* key) const {
     require(kw.contains(key), "run: missing setting '{}'", key);
     return kw[key];
-  };
+  }
+};
+
+bool bool_arg(const py::handle& o, const std::string& name) {
+  require(py::isinstance<py::bool_>(o), "{}: expected True or False, got {}", name, type_name(o));
+  return o.cast<bool>();
+}
+
+/// The observation model of a run, mapped as the tool maps its flags (cmd_mcl_laser.cpp): the
+/// shared parameters (nav2's names) mean the same in both models.
+void read_laser_model(const RunArgs& arg, bool implicit, experiments::LaserMclSettings& s) {
+  py::dict field;
+  for (const char* key :
+       {"z_hit", "z_rand", "sigma_hit", "max_dist", "max_beams", "interpolation", "aggregation"})
+    field[key] = arg(key);
+  s.laser = laser_spec(field, "run").params;
+  if (!arg("laser_max_range").is_none())
+    s.laser.laser_max_range =
+        number_arg(arg("laser_max_range"), "laser_max_range", 0.0, kInf, true);
+  py::dict beam;
+  for (const char* key : {"z_short", "z_max", "lambda_short"}) beam[key] = arg(key);
+  s.beam = beam_spec(beam, "run").params;
+  s.beam.z_hit = s.laser.z_hit;
+  s.beam.z_rand = s.laser.z_rand;
+  s.beam.sigma_hit = s.laser.sigma_hit;
+  s.beam.max_beams = s.laser.max_beams;
+  s.beam.laser_max_range = s.laser.laser_max_range;
+  s.laser_model = experiments::parse_laser_model(
+      choice_arg(arg("laser_model"), "laser_model", {"likelihood-field", "beam"}));
+  if (s.laser_model == experiments::LaserModelKind::kBeam)
+    require(!implicit, kBeamNeedsBootstrap);
+  else
+    require_differentiable(implicit, s.laser);
+}
+
+/// KLD-sampling and recovery, as the tool maps --kld and --recovery: the particle count adapts
+/// between min(100, M) and max(5000, M); recovery is "uniform" or "none" (the tool's "auto" is
+/// none for laser runs).
+void read_kld_recovery(const RunArgs& arg, experiments::LaserMclSettings& s) {
+  s.kld.enabled = bool_arg(arg("kld"), "kld");
+  s.kld.kld_err = number_arg(arg("kld_err"), "kld_err", 0.0, 1.0, true);
+  s.kld.kld_z = number_arg(arg("kld_z"), "kld_z", 0.0, 10.0);
+  const py::object recovery = arg("recovery");
+  require(!(py::isinstance<py::str>(recovery) && recovery.cast<std::string>() == "mixture"),
+          "recovery: 'mixture' is the landmark runs' source (over the minima of -log p(z | x)); "
+          "a laser run takes 'uniform' (AMCL's, over the free cells) or 'none'");
+  s.recovery.enabled = choice_arg(recovery, "recovery", {"none", "uniform"}) == "uniform";
+  const double slow = number_arg(arg("recovery_alpha_slow"), "recovery_alpha_slow", 0.0, 1.0, true);
+  const double fast = number_arg(arg("recovery_alpha_fast"), "recovery_alpha_fast", 0.0, 1.0, true);
+  require(fast > slow, "recovery_alpha_fast: expected a number > recovery_alpha_slow = {}, got {}",
+          slow, fast);
+  s.recovery.recovery_alpha_slow = slow;
+  s.recovery.recovery_alpha_fast = fast;
+  s.recovery.kidnap_probability =
+      number_arg(arg("kidnap_probability"), "kidnap_probability", 0.0, 0.5, true);
+}
+
+std::string run(const py::dict& kw, const py::object& progress) {
+  const RunArgs arg{kw};
   experiments::LaserMclSettings s;
   s.data.data = path_arg(arg("data"), "data");
   if (!arg("map").is_none()) s.data.map = path_arg(arg("map"), "map");
@@ -274,24 +380,14 @@ std::string run(const py::dict& kw, const py::object& progress) {
   s.filter_alphas = arg("filter_alphas").is_none()
                         ? s.odometry_noise
                         : alphas_arg(arg("filter_alphas"), "filter_alphas");
-  py::dict field;
-  for (const char* key :
-       {"z_hit", "z_rand", "sigma_hit", "max_dist", "max_beams", "interpolation", "aggregation"})
-    field[key] = arg(key);
-  s.laser = laser_spec(field, "run").params;
-  if (!arg("laser_max_range").is_none())
-    s.laser.laser_max_range =
-        number_arg(arg("laser_max_range"), "laser_max_range", 0.0, kInf, true);
-  require_differentiable(implicit, s.laser);
+  read_laser_model(arg, implicit, s);
   s.start = choice_arg(arg("start"), "start", {"known", "global"}) == "known"
                 ? experiments::StartKind::kKnown
                 : experiments::StartKind::kGlobal;
   s.global_updates = static_cast<int>(int_arg(arg("global_updates"), "global_updates", 1, 100000));
   s.global_success_radius = number_arg(arg("global_radius"), "global_radius", 0.0, kInf, true);
-  const py::object tracks = arg("tracks");
-  require(py::isinstance<py::bool_>(tracks), "tracks: expected True or False, got {}",
-          type_name(tracks));
-  s.keep_tracks = tracks.cast<bool>();
+  read_kld_recovery(arg, s);
+  s.keep_tracks = bool_arg(arg("tracks"), "tracks");
   const int threads = static_cast<int>(int_arg(arg("threads"), "threads", 0, 100000));
   require(progress.is_none() || PyCallable_Check(progress.ptr()),
           "progress: expected a callable progress(done, total) or None, got {}",

@@ -1,6 +1,6 @@
-"""implicit.laser: grids and map files, the likelihood field against closed forms computed here,
-the odometry model against its equations, a filter tracking a simulated path, and the one-call
-run against `implicit mcl --sensor laser --json`."""
+"""implicit.laser: grids and map files, the likelihood field and the beam model against closed
+forms computed here, the odometry model against its equations, filters tracking a simulated path,
+and the one-call run against `implicit mcl --sensor laser --json`."""
 import math
 
 import numpy as np
@@ -107,6 +107,124 @@ def wall_scan(rng, beams=37, range_max=4.0, range_min=0.1):
     ranges[[8, 25]] = 0.05                # below range_min: skipped
     return dict(ranges=ranges, angle_min=-math.pi / 2, angle_increment=math.pi / 36,
                 range_min=range_min, range_max=range_max)
+
+
+def beam_model_log_density(r, no_return, zhat, weights, sigma, lam, range_max):
+    """Spec §3.12, "The beam model", per beam, written out here: log p(r | zhat) of a reading r <
+    range_max, log P(no return | zhat) where no_return. weights = (z_hit, z_short, z_max, z_rand)."""
+    z_hit, z_short, z_max, z_rand = weights
+    total = sum(weights)
+    hit = z_hit * np.exp(-0.5 * ((r - zhat) / sigma) ** 2) / (math.sqrt(2 * math.pi) * sigma)
+    short = np.where(r <= zhat, z_short * lam * np.exp(-lam * r) / -np.expm1(-lam * zhat), 0.0)
+    density = (hit + short + z_rand / range_max) / total
+    upper_tail = np.array([0.5 * math.erfc((range_max - e) / (sigma * math.sqrt(2))) for e in zhat])
+    missed = (z_hit * upper_tail + z_max) / total
+    return np.log(np.where(no_return, missed, density))
+
+
+def range_to_wall(origin, heading, range_max, height=80 * RES):
+    """Where a ray from origin (x < 5 m) along heading meets the one-wall grid's wall, whose face
+    is the line x = 5 m (column 80's left edge): (5 - x) / cos(heading) if the ray gets there
+    inside the grid (0 <= y < height) within range_max, else range_max (nothing else is occupied,
+    and outside the grid is empty)."""
+    c, s = np.cos(heading), np.sin(heading)
+    ahead = c > 0  # the others leave the grid on the left, where nothing is occupied
+    t = np.where(ahead, (WALL * RES - origin[0]) / np.where(ahead, c, 1.0), 0.0)
+    y = origin[1] + t * s
+    inside = ahead & (y >= 0) & (y < height)
+    # No ray passes within a hair of the grid's corners or of range_max: the cases are clear.
+    assert np.all(np.abs(np.where(ahead, y, 1.0)) > 1e-6)
+    assert np.all(np.abs(np.where(ahead, y - height, 1.0)) > 1e-6)
+    assert np.all(np.abs(np.where(inside, t - range_max, 1.0)) > 1e-6)
+    return np.where(inside & (t < range_max), t, range_max)
+
+
+@pytest.mark.parametrize("max_beams,max_range,min_range", [(60, None, None), (10, 3.5, 0.15)])
+def test_beam_model_equals_the_closed_form_on_one_wall(wall_grid, max_beams, max_range,
+                                                       min_range):
+    # The expected range of a beam is the distance to the wall along it (the ray cast enters the
+    # wall cell at its left face); the density of each reading is the spec's, so log p has a
+    # closed form. laser_max_range and laser_min_range, when given, replace the scan's.
+    weights, sigma, lam = (0.6, 0.1, 0.05, 0.3), 0.15, 0.3
+    mount = (0.1, -0.05, 0.2)
+    beam = laser.BeamModel(wall_grid, z_hit=weights[0], z_short=weights[1], z_max=weights[2],
+                           z_rand=weights[3], sigma_hit=sigma, lambda_short=lam,
+                           max_beams=max_beams, laser_max_range=max_range,
+                           laser_min_range=min_range, mount=mount)
+    assert not beam.differentiable
+    rng = np.random.default_rng(8)
+    n = 37
+    ranges = rng.uniform(0.2, 3.9, n)
+    ranges[[3, 17, 30]] = 4.0             # the scan's range_max: no return
+    ranges[[8, 25]] = 0.05                # below the scan's range_min
+    ranges[[12, 27]] = 0.12               # below min_range only
+    ranges[[6, 36]] = 3.7                 # beyond max_range only: no return there
+    scan = dict(ranges=ranges, angle_min=-math.pi / 2, angle_increment=math.pi / 36,
+                range_min=0.1, range_max=4.0)
+    range_max = max_range or scan["range_max"]
+    range_min = min_range or scan["range_min"]
+    poses = np.column_stack([rng.uniform(2.5, 3.5, 6), rng.uniform(2.0, 3.0, 6),
+                             rng.uniform(-math.pi / 2, math.pi / 2, 6)])
+    got = beam.log_likelihood(poses, **scan)
+    picked = np.zeros(n, bool)
+    m = min(n, max_beams)
+    picked[np.rint(np.arange(m) * (n - 1) / (m - 1)).astype(int)] = True
+    no_return = ranges >= range_max
+    used = picked & (no_return | (ranges >= range_min))
+    assert 0 < (picked & no_return).sum() and used.sum() < picked.sum()  # both cases are met
+    bearings = scan["angle_min"] + scan["angle_increment"] * np.flatnonzero(used)
+    saw = {"hit": 0, "short": 0, "open": 0}
+    for pose, value in zip(poses, got):
+        origin = compose(pose, np.array(mount))
+        zhat = range_to_wall(origin[:2], origin[2] + bearings, range_max)
+        r = np.where(no_return[used], range_max, ranges[used])
+        reading = ~no_return[used]
+        assert np.abs(r - zhat)[reading].min() > 1e-9  # none on the short term's edge r = zhat
+        saw["hit"] += int((zhat < range_max).sum())
+        saw["short"] += int((r < zhat).sum())
+        saw["open"] += int((zhat == range_max).sum())
+        terms = beam_model_log_density(r, no_return[used], zhat, weights, sigma, lam, range_max)
+        # Rounding: each term's few dozen operations, and the ray cast's zhat (a few roundings
+        # of numbers below 10 m) times how fast the term changes with zhat (bounded by the
+        # hit's |r - zhat| / sigma^2, the short term's 1 / zhat + lambda and the censored
+        # hit's z_hit / (sigma z_max)).
+        slope = np.abs(r - zhat) / sigma**2 + 1 / zhat + lam + weights[0] / (sigma * weights[2])
+        tol = 1e3 * EPS * (np.abs(terms).sum() + 10 * slope.sum())
+        assert value == pytest.approx(terms.sum(), rel=0, abs=tol)
+    assert min(saw.values()) > 0, saw  # walls seen, short readings, and beams with open space
+
+
+def test_beam_density_and_no_return_add_up_to_one(wall_grid):
+    # Spec §3.12: per beam the density over [0, R) and the mass of "no return" add to one, less
+    # the hit's Gaussian mass below zero, Phi(-zhat / sigma) z_hit / S. One beam straight at the
+    # wall from 2 m away (zhat = 2 exactly), scored at readings r across [0, R).
+    weights, sigma, lam, range_max = (0.5, 0.2, 0.1, 0.3), 0.6, 0.4, 4.0
+    beam = laser.BeamModel(wall_grid, z_hit=weights[0], z_short=weights[1], z_max=weights[2],
+                           z_rand=weights[3], sigma_hit=sigma, lambda_short=lam)
+    pose = np.array([[3.0, 2.5, 0.0]])
+
+    def density(r):
+        return math.exp(beam.log_likelihood(pose, ranges=[r], angle_min=0.0, angle_increment=0.1,
+                                            range_min=0.0, range_max=range_max)[0])
+
+    def simpson(a, b, pieces):
+        r = np.linspace(a, b, 2 * pieces + 1)
+        f = np.array([density(x) for x in r])
+        return (b - a) / (6 * pieces) * (f[0] + 4 * f[1:-1:2].sum() + 2 * f[2:-1:2].sum() + f[-1])
+
+    zhat = 2.0
+    # The short term stops at r = zhat, and a reading of R is "no return", a point mass: the
+    # density is integrated on each side of zhat, up to just below R (the slivers left out
+    # weigh below 1e-11).
+    mass = simpson(0.0, zhat, 500) + simpson(zhat + 1e-12, range_max - 1e-12, 500)
+    mass += density(range_max)
+    want = 1 - 0.5 * math.erfc(zhat / (sigma * math.sqrt(2))) * weights[0] / sum(weights)
+    # Simpson's error is (b - a) h^4 / 180 times the largest fourth derivative, which is at most
+    # 3 z_hit / (sqrt(2 pi) sigma^5 S) = 7 for the Gaussian (and lambda^4 times the short term's
+    # 0.2 for the rest): with h = 2e-3, about 1e-12; the slivers and rounding (2000 terms of
+    # about eps each) add as much again.
+    assert mass == pytest.approx(want, rel=0, abs=1e-10)
+    assert want < 1 - 1e-4  # the hit's mass below zero is visible at this sigma
 
 
 @pytest.mark.parametrize("max_beams", [60, 10])
@@ -260,8 +378,9 @@ def room_path(steps=60):
     return np.column_stack([x, y, heading])
 
 
-@pytest.mark.parametrize("proposal", ["implicit", "bootstrap"])
-def test_particle_filter_tracks_a_simulated_path(room, proposal):
+@pytest.mark.parametrize("proposal,model", [("implicit", "field"), ("bootstrap", "field"),
+                                            ("bootstrap", "beam")])
+def test_particle_filter_tracks_a_simulated_path(room, proposal, model):
     truth = room_path()
     noise = laser.OdometryModel(*(0.05,) * 4)
     # Odometry as a robot would report it: the true increments with the alpha noise.
@@ -272,8 +391,12 @@ def test_particle_filter_tracks_a_simulated_path(room, proposal):
         dead.append(compose(dead[-1], u))
     dead_rmse = np.sqrt(((np.array(dead)[:, :2] - truth[:, :2]) ** 2).sum(axis=1).mean())
     assert dead_rmse > 0.2  # the odometry alone drifts: the scans have something to correct
-    pf = laser.ParticleFilter(room, proposal=proposal, particles=100, seed=3,
-                              alphas=(0.05,) * 4, sigma_hit=0.1)
+    if model == "beam":
+        pf = laser.ParticleFilter(room, proposal=proposal, particles=100, seed=3,
+                                  alphas=(0.05,) * 4, laser=laser.BeamModel(room, sigma_hit=0.1))
+    else:
+        pf = laser.ParticleFilter(room, proposal=proposal, particles=100, seed=3,
+                                  alphas=(0.05,) * 4, sigma_hit=0.1)
     pf.initialize(truth[0], np.diag([0.05, 0.05, 0.02]) ** 2)
     # A prediction alone moves the particles and leaves the weights alone.
     w = pf.weights
@@ -368,6 +491,37 @@ def test_run_passes_every_setting_as_the_cli(cli, aces):
     assert g["start"] == "global" and g["implicit_map"] == "random" and g["implicit_starts"] == 3
     t = laser.run(aces, particles=20, runs=1, max_updates=5, tracks=True)
     assert np.array(t["per_run"][0]["estimates"]).shape == (5, 3)
+
+
+def test_run_beam_model_kld_and_recovery_equal_the_cli(cli, aces):
+    r = laser.run(aces, proposal="bootstrap", laser_model="beam", particles=200, runs=1, seed=2,
+                  max_updates=15, sigma_hit=0.15, max_beams=30, z_short=0.1, z_max=0.02,
+                  lambda_short=0.2, kld=True, kld_err=0.05, kld_z=0.9, recovery="uniform",
+                  recovery_alpha_slow=0.002, recovery_alpha_fast=0.2, kidnap_probability=0.01)
+    c = cli("mcl", "--sensor", "laser", "--data", aces, "--method", "standard", "--laser-model",
+            "beam", "-M", "200", "--runs", "1", "--seed", "2", "--max-updates", "15",
+            "--sigma-hit", "0.15", "--max-beams", "30", "--z-short", "0.1", "--z-max", "0.02",
+            "--lambda-short", "0.2", "--kld", "--kld-err", "0.05", "--kld-z", "0.9",
+            "--recovery", "uniform", "--recovery-alpha-slow", "0.002", "--recovery-alpha-fast",
+            "0.2", "--kidnap-probability", "0.01")
+    same_numbers(r, c)
+    assert r["laser_model"] == "beam" and "laser" not in r
+    assert r["beam"] == dict(z_hit=0.5, z_short=0.1, z_max=0.02, z_rand=0.5, sigma_hit=0.15,
+                             lambda_short=0.2, max_beams=30)
+    # KLD-sampling's bounds are the tool's, min(100, M) and max(5000, M); a tracking filter
+    # needs fewer particles than it starts with.
+    assert r["kld"] == dict(kld_err=0.05, kld_z=0.9, min_particles=100, max_particles=5000)
+    assert 100 <= r["particles_mean"]["mean"] < 200
+    assert r["recovery"] == dict(source="uniform", recovery_alpha_slow=0.002,
+                                 recovery_alpha_fast=0.2, kidnap_probability=0.01)
+    # Without them: no recovery (the tool's "auto" for laser runs, also for a global start) and
+    # a fixed particle count.
+    g = laser.run(aces, proposal="bootstrap", laser_model="beam", particles=100, runs=1,
+                  max_updates=12, start="global")
+    c = cli("mcl", "--sensor", "laser", "--data", aces, "--method", "standard", "--laser-model",
+            "beam", "-M", "100", "--runs", "1", "--max-updates", "12", "--init", "global")
+    same_numbers(g, c)
+    assert g["recovery"] is None and g["kld"] is None and g["particles_mean"]["mean"] == 100
 
 
 def test_carmen_scans_and_mapping_forms(aces):

@@ -19,12 +19,19 @@ def room_cells():
 # Bad input: each argument of each function, the exception type and the argument's name.
 GRID = laser.OccupancyGrid(room_cells(), 0.05)
 FIELD = laser.LikelihoodField(GRID)
+BEAM = laser.BeamModel(GRID)
 SCAN = dict(ranges=np.ones(5), angle_min=-0.5, angle_increment=0.25, range_min=0.0,
             range_max=10.0)
 
 
 def initialized_filter():
     pf = laser.ParticleFilter(GRID, particles=10)
+    pf.initialize([2.0, 2.0, 0.0], np.eye(3) * 0.01)
+    return pf
+
+
+def initialized_beam_filter():
+    pf = laser.ParticleFilter(GRID, proposal="bootstrap", particles=10, laser=BEAM)
     pf.initialize([2.0, 2.0, 0.0], np.eye(3) * 0.01)
     return pf
 
@@ -50,6 +57,8 @@ SCAN_TAKERS = {
     "log_likelihood": lambda **s: FIELD.log_likelihood(np.zeros((2, 3)) + 2.0, **s),
     "negative_log_likelihood": lambda **s: FIELD.negative_log_likelihood([2.0, 2.0, 0.0], **s),
     "step": lambda **s: initialized_filter().step([0.1, 0.0, 0.0], **s),
+    "beam_log_likelihood": lambda **s: BEAM.log_likelihood(np.zeros((2, 3)) + 2.0, **s),
+    "beam_step": lambda **s: initialized_beam_filter().step([0.1, 0.0, 0.0], **s),
 }
 
 
@@ -87,6 +96,10 @@ def sim(*args, **kw):
 
 def field(*args, **kw):
     return lambda: laser.LikelihoodField(*(args or (GRID,)), **kw)
+
+
+def beam(*args, **kw):
+    return lambda: laser.BeamModel(*(args or (GRID,)), **kw)
 
 
 def pf(*args, **kw):
@@ -153,6 +166,29 @@ BAD = [
     (lambda: FIELD.negative_log_likelihood(ONE_POSE, **SCAN), r"^pose: expected shape \(3,\)"),
     (lambda: laser.LikelihoodField(GRID, interpolation="nearest").negative_log_likelihood(
         X0, **SCAN), r"^negative_log_likelihood: expected interpolation 'bilinear' or"),
+    # BeamModel
+    (beam("room"), r"^grid: " + GRID_TYPE + ", got str"),
+    (beam(z_hit=0), r"^z_hit: expected a finite number > 0, got 0"),
+    (beam(z_hit=math.nan), r"^z_hit: expected a finite number > 0, got nan"),
+    (beam(z_short=-0.1), r"^z_short: expected a finite number >= 0, got -0\.1"),
+    (beam(z_short=math.nan), r"^z_short: expected a finite number >= 0, got nan"),
+    (beam(z_max=-1), r"^z_max: expected a finite number >= 0, got -1"),
+    (beam(z_max=math.inf), r"^z_max: expected a finite number >= 0, got inf"),
+    (beam(z_rand=-0.5), r"^z_rand: expected a finite number >= 0, got -0\.5"),
+    (beam(z_rand="half"), r"^z_rand: expected .* got str"),
+    (beam(sigma_hit=0), r"^sigma_hit: expected a finite number > 0, got 0"),
+    (beam(sigma_hit=math.nan), r"^sigma_hit: expected a finite number > 0, got nan"),
+    (beam(lambda_short=0), r"^lambda_short: expected a finite number > 0, got 0"),
+    (beam(lambda_short=-1), r"^lambda_short: expected a finite number > 0, got -1"),
+    (beam(max_beams=0), r"^max_beams: expected an integer in \[1, 1000000\], got 0"),
+    (beam(max_beams=2.0), r"^max_beams: expected an integer .* got float"),
+    (beam(laser_max_range=0), r"^laser_max_range: expected a finite number > 0, got 0"),
+    (beam(laser_max_range=math.nan), r"^laser_max_range: expected a finite number > 0"),
+    (beam(laser_min_range=-1), r"^laser_min_range: expected a finite number > 0, got -1"),
+    (beam(mount=(0, 0)), r"^mount: expected shape \(3,\)"),
+    (beam(mount=(0, math.nan, 0)), r"^mount: expected finite values"),
+    (lambda: BEAM.log_likelihood(np.zeros(3), **SCAN), r"^poses: expected shape \(n, 3\)"),
+    (lambda: BEAM.log_likelihood([[0, 0, math.nan]], **SCAN), r"^poses: expected finite values"),
     # OdometryModel
     (lambda: laser.OdometryModel(alpha1=-1), r"^alpha1: expected a finite number >= 0"),
     (lambda: laser.OdometryModel(alpha2=math.nan), r"^alpha2: expected a finite number"),
@@ -186,6 +222,16 @@ BAD = [
     (pf(aggregation="cubed-sum"), r"^aggregation: the implicit proposal needs"),
     (pf(starts=0), r"^starts: expected an integer in \[1, 64\], got 0"),
     (pf(resample_threshold=1.5), r"^resample_threshold: expected a number in \[0, 1\], got 1\.5"),
+    # ... on the beam model: the bootstrap proposal only (the C++ filter's refusal, named)
+    (pf(laser=BEAM), r"^proposal: the implicit proposal needs an observation model with "
+     r"derivatives, and the beam model has none"),
+    (pf(proposal="implicit", laser=BEAM, starts=3), r"^proposal: the implicit proposal needs"),
+    (pf(proposal="bootstrap", laser=BEAM, sigma_hit=0.1),
+     r"^laser: 'sigma_hit' is a LikelihoodField keyword, and laser is a BeamModel"),
+    (pf(laser.OccupancyGrid(Z2, 0.05), proposal="bootstrap", laser=BEAM),
+     r"^laser: expected a BeamModel built on grid, got one on another map"),
+    (pf(proposal="bootstrap", laser=FIELD), r"^laser: expected a dict of LikelihoodField keywords "
+     r".*, a BeamModel or None, got LikelihoodField"),
     (init([0, 0], np.eye(3)), r"^mean: expected shape \(3,\)"),
     (init(X0, np.eye(2)), r"^covariance: expected shape \(3, 3\)"),
     (init(X0, -np.eye(3)), r"^covariance: expected a positive definite matrix"),
@@ -214,6 +260,32 @@ BAD = [
     (run_with(laser_max_range=0), r"^laser_max_range: expected a finite number > 0"),
     (run_with(interpolation="nearest"), r"^interpolation: the implicit proposal needs"),
     (run_with(aggregation="max"), r"^aggregation: expected 'product' or 'cubed-sum'"),
+    (run_with(laser_model="sonar"), r"^laser_model: expected 'likelihood-field' or 'beam', "
+     r"got 'sonar'"),
+    (run_with(laser_model=None), r"^laser_model: expected 'likelihood-field' or 'beam', got "
+     r"NoneType"),
+    (run_with(laser_model="beam"), r"^proposal: the implicit proposal needs an observation model "
+     r"with derivatives, and the beam model has none"),
+    (run_with(proposal="bootstrap", laser_model="beam", z_short=-1),
+     r"^z_short: expected a finite number >= 0, got -1"),
+    (run_with(z_max=math.nan), r"^z_max: expected a finite number >= 0, got nan"),
+    (run_with(lambda_short=0), r"^lambda_short: expected a finite number > 0, got 0"),
+    (run_with(proposal="bootstrap", laser_model="beam", sigma_hit=0),
+     r"^sigma_hit: expected a finite number > 0, got 0"),
+    (run_with(proposal="bootstrap", laser_model="beam", z_hit=0),
+     r"^z_hit: expected a finite number > 0, got 0"),
+    (run_with(proposal="bootstrap", laser_model="beam", max_beams=0),
+     r"^max_beams: expected an integer in \[1, 1000000\], got 0"),
+    (run_with(kld="yes"), r"^kld: expected True or False, got str"),
+    (run_with(kld_err=0), r"^kld_err: expected a number in \(0, 1\], got 0"),
+    (run_with(kld_z=math.nan), r"^kld_z: expected a number in \[0, 10\], got nan"),
+    (run_with(recovery="mixture"), r"^recovery: 'mixture' is the landmark runs' source"),
+    (run_with(recovery="auto"), r"^recovery: expected 'none' or 'uniform', got 'auto'"),
+    (run_with(recovery=True), r"^recovery: expected 'none' or 'uniform', got bool"),
+    (run_with(recovery_alpha_slow=0), r"^recovery_alpha_slow: expected a number in \(0, 1\]"),
+    (run_with(recovery_alpha_fast=0.0005), r"^recovery_alpha_fast: expected a number > "
+     r"recovery_alpha_slow = 0\.001, got 0\.0005"),
+    (run_with(kidnap_probability=0.9), r"^kidnap_probability: expected a number in \(0, 0\.5\]"),
     (run_with(update_min_d=-1), r"^update_min_d: expected a finite number >= 0"),
     (run_with(update_min_a=math.nan), r"^update_min_a: expected a finite number >= 0"),
     (run_with(map_resolution=2.0), r"^map_resolution: expected a number in \[0\.005, 1\]"),
