@@ -9,6 +9,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include <Eigen/LU>
@@ -25,13 +26,18 @@ using robot::Landmark;
 using robot::Measurement;
 using robot::Pose;
 
+// The filter's step as a proposal sees it: the landmark model, the detections and the context.
+// Not copyable: the context points into it.
 struct UpdateFixture {
+  using Observation = robot::LandmarkObservation<robot::RangeBearingSensor>;
   robot::UteModel model;
   robot::RangeBearingSensor sensor;
   std::vector<Landmark> map;
   std::vector<LabelledMeasurement> z;
   std::vector<Pose> previous;
-  filter::ProposalContext<robot::UteModel, robot::RangeBearingSensor> ctx;
+  std::optional<Observation> observation;
+  Observation::Prepared detections;
+  filter::ObservationContext<robot::UteModel, Observation> ctx;
 
   explicit UpdateFixture(int in_view) {
     const Pose truth(0.0, 0.0, kPi / 2);  // heading north: bearing pi/2 is straight ahead
@@ -52,15 +58,17 @@ struct UpdateFixture {
     for (int j = 0; j < 1024; ++j)
       previous.push_back(
           before + Vec<3>(0.1 * std::sin(j), 0.1 * std::cos(1.3 * j), 0.01 * std::sin(0.7 * j)));
+    robot::LandmarkMap landmarks;
+    for (std::size_t i = 0; i < map.size(); ++i) landmarks.add(static_cast<int>(i), map[i]);
+    observation.emplace(sensor, std::move(landmarks));
+    detections = observation->view(z);
     ctx.motion = &model;
-    ctx.sensor = &sensor;
-    ctx.map = map;
-    ctx.noise_information = sensor.noise_covariance().llt().solve(robot::Mat2::Identity());
-    ctx.log_det_noise = std::log(sensor.noise_covariance().determinant());
-    ctx.log_clutter = robot::clutter_log_density(ctx.association.gate, sensor.noise_covariance());
+    ctx.observation = &*observation;
     ctx.u = robot::Control(3.0, 0.05);
-    ctx.z = z;
+    ctx.z = &detections;
   }
+  UpdateFixture(const UpdateFixture&) = delete;
+  UpdateFixture& operator=(const UpdateFixture&) = delete;
 };
 
 template <typename Proposal>
@@ -89,7 +97,7 @@ BENCHMARK(BM_LaserUpdatePerParticle<filter::ImplicitProposal>)->Arg(1)->Arg(3)->
 template <typename Proposal>
 void BM_PredictionPerParticle(benchmark::State& state) {
   UpdateFixture f(0);
-  f.ctx.z = {};
+  f.ctx.z = nullptr;
   const Proposal proposal{};
   std::uint64_t j = 0;
   for (auto _ : state) {

@@ -38,17 +38,11 @@ TEST(GlobalLocalizationCarPark, ModesOfFirstScanIncludeGpsPosition) {
 
   std::vector<LabelledMeasurement> z;
   for (const auto& o : scan->observations) z.push_back({o.z, o.landmark_id});
-  ProposalContext<robot::UteModel, robot::RangeBearingSensor> ctx;
-  ctx.sensor = &sensor;
-  ctx.map = log.landmarks.positions();
-  const Eigen::LLT<Mat2> llt(sensor.noise_covariance());
-  ctx.noise_information = llt.solve(Mat2::Identity());
-  ctx.log_det_noise = 2.0 * std::log(llt.matrixL()(0, 0) * llt.matrixL()(1, 1));
-  ctx.log_clutter = robot::clutter_log_density(ctx.association.gate, sensor.noise_covariance());
-  ctx.z = z;
+  const robot::LandmarkObservation<robot::RangeBearingSensor> observation(sensor, log.landmarks);
+  const auto ctx = observation.view(z);
 
   const GlobalInitOptions options;
-  const PoseBounds bounds = map_bounds(ctx.map, options.margin);
+  const PoseBounds bounds = map_bounds(observation.landmarks(), options.margin);
   GlobalInitStats st;
   const auto t0 = std::chrono::steady_clock::now();
   const auto modes = find_pose_modes(ctx, bounds, options, &st);
@@ -72,7 +66,7 @@ TEST(GlobalLocalizationCarPark, ModesOfFirstScanIncludeGpsPosition) {
   const WeightSummary ws = normalize_log_weights(lw, w);
   const double ess = ws.ess;
   // Every detection's likelihood is at least p0, so log Z >= n log p0 (the all-clutter floor).
-  const double floor = static_cast<double>(z.size()) * ctx.log_clutter;
+  const double floor = static_cast<double>(z.size()) * observation.log_clutter();
   std::vector<double> lw_defensive(kN);
   sample_pose_mixture(ctx, modes, bounds, 1, 0, x, lw_defensive, 0.5);
   const WeightSummary wd = normalize_log_weights(lw_defensive, w);

@@ -17,21 +17,15 @@ namespace implicit::filter {
 namespace {
 
 using robot::RangeBearingSensor;
-using Ctx = ProposalContext<robot::UteModel, RangeBearingSensor>;
+using Model = robot::LandmarkObservation<RangeBearingSensor>;
+using Detections = robot::LandmarkDetections<RangeBearingSensor>;
 
-/// A context as the particle filter builds it (default association: 99 % gate, clutter on).
-Ctx make_context(const RangeBearingSensor& sensor, const std::vector<Landmark>& map,
-                 const std::vector<LabelledMeasurement>& z) {
-  Ctx ctx;
-  ctx.sensor = &sensor;
-  ctx.map = map;
-  const Mat2& noise = sensor.noise_covariance();
-  const Eigen::LLT<Mat2> llt(noise);
-  ctx.noise_information = llt.solve(Mat2::Identity());
-  ctx.log_det_noise = 2.0 * std::log(llt.matrixL()(0, 0) * llt.matrixL()(1, 1));
-  ctx.log_clutter = robot::clutter_log_density(ctx.association.gate, noise);
-  ctx.z = z;
-  return ctx;
+/// The landmark model as the particle filter builds it (default association: 99 % gate, clutter
+/// on), with the map's indices as ids.
+Model make_model(const RangeBearingSensor& sensor, const std::vector<Landmark>& map) {
+  robot::LandmarkMap m;
+  for (std::size_t i = 0; i < map.size(); ++i) m.add(static_cast<int>(i), map[i]);
+  return Model(sensor, m);
 }
 
 /// Exact detections of every landmark from `truth`; label = index, or -1 when unlabelled.
@@ -50,12 +44,13 @@ const std::vector<Landmark> kSquare = {Landmark(10, 10), Landmark(-10, 10), Land
 TEST(GlobalLocalization, SymmetricSquareHasFourEqualModes) {
   const RangeBearingSensor sensor;
   const auto z = observe(sensor, kSquare, Pose(0, 0, 0), false);
-  const Ctx ctx = make_context(sensor, kSquare, z);
+  const Model model = make_model(sensor, kSquare);
+  const Detections ctx = model.view(z);
   GlobalInitStats st;
   const auto modes = find_pose_modes(ctx, map_bounds(kSquare, 5.0), GlobalInitOptions{}, &st);
   ASSERT_GE(modes.size(), 4u);
   // Exact data: the best phi is the constant of 4 associated terms, 4 (log 2pi + 1/2 log det S2).
-  EXPECT_NEAR(modes[0].phi, 4.0 * (kLog2Pi + 0.5 * ctx.log_det_noise), 1e-9);
+  EXPECT_NEAR(modes[0].phi, 4.0 * (kLog2Pi + 0.5 * model.log_det_noise()), 1e-9);
   std::size_t best = 0;
   while (best < modes.size() && modes[best].phi <= modes[0].phi + 1e-6) ++best;
   EXPECT_EQ(best, 4u);
@@ -81,8 +76,9 @@ TEST(GlobalLocalization, LabelledDetectionsGiveOneMode) {
   const Pose truth(2.0, -3.0, 0.7);
   const auto z = observe(sensor, kSquare, truth, true);
   GlobalInitStats st;
-  const auto modes = find_pose_modes(make_context(sensor, kSquare, z), map_bounds(kSquare, 5.0),
-                                     GlobalInitOptions{}, &st);
+  const Model model = make_model(sensor, kSquare);
+  const auto modes =
+      find_pose_modes(model.view(z), map_bounds(kSquare, 5.0), GlobalInitOptions{}, &st);
   // Other local minima exist (wrapped bearings), with phi ~1e4 above: weight ratio exp(-1e4).
   ASSERT_EQ(modes.size(), 1u);
   EXPECT_GE(st.negligible, 1u);
@@ -96,15 +92,17 @@ struct SmallMap {
   RangeBearingSensor sensor{0.09, 0.0225};
   std::vector<Landmark> map = {Landmark(0, 4), Landmark(4, 0), Landmark(-3, -3)};
   std::vector<LabelledMeasurement> z;
-  Ctx ctx;
+  Model model = make_model(sensor, map);
+  Detections ctx;
   PoseBounds bounds = map_bounds(map, 2.0);
   SmallMap() {
     z = observe(sensor, map, Pose(0.5, 0.3, 3.05), true);
     z[0].z += Measurement(0.2, -0.1);
     z[1].z += Measurement(-0.15, 0.05);
     z[2].z += Measurement(0.1, 0.12);
-    ctx = make_context(sensor, map, z);
+    ctx = model.view(z);
   }
+  SmallMap(const SmallMap&) = delete;  // ctx points into it
 };
 
 /// Z and the posterior mean by the grid against the weights of N = 20000 draws with the given
@@ -131,8 +129,7 @@ void check_weights_against_grid(double uniform_fraction) {
         Pose x = mode.mu + d;
         x(2) = wrap_angle(x(2));
         if (!s.bounds.contains(x)) continue;
-        ParticleStats st;
-        const double t = std::exp(log_u + detail::sensor_log_likelihood(s.ctx, x, st));
+        const double t = std::exp(log_u + s.model.log_likelihood(s.ctx, x));
         z += t;
         moment += t * Vec<3>(x(0), x(1), d(2));
       }
@@ -201,7 +198,8 @@ TEST(GlobalLocalization, WrappedDensityMatchesSumOverShifts) {
 TEST(GlobalLocalization, SameNumbersForOneAndTwoThreads) {
   const RangeBearingSensor sensor;
   const auto z = observe(sensor, kSquare, Pose(1.0, 2.0, 0.3), false);
-  const Ctx ctx = make_context(sensor, kSquare, z);
+  const Model model = make_model(sensor, kSquare);
+  const Detections ctx = model.view(z);
   const PoseBounds b = map_bounds(kSquare, 5.0);
   auto run = [&](int threads, std::vector<Laplace<3>>& modes, std::vector<Pose>& x,
                  std::vector<double>& lw) {
@@ -230,7 +228,8 @@ TEST(GlobalLocalization, SameNumbersForOneAndTwoThreads) {
 TEST(GlobalLocalization, Errors) {
   const RangeBearingSensor sensor;
   const auto z = observe(sensor, kSquare, Pose(0, 0, 0), false);
-  const Ctx ctx = make_context(sensor, kSquare, z);
+  const Model model = make_model(sensor, kSquare);
+  const Detections ctx = model.view(z);
   std::vector<Pose> x(4);
   std::vector<double> lw(4);
   try {

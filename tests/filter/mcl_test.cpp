@@ -37,6 +37,33 @@ void expect_rel(const A& a, const B& b, double tol, const char* what) {
     EXPECT_NEAR(a(i), b(i), tol * std::max(1.0, std::abs(b(i)))) << what << " entry " << i;
 }
 
+// One step of the landmark observation model as the filter hands it to a proposal: the model
+// (map indices as ids), the detections and the context. Not copyable: the context points into it.
+template <typename Motion, typename Sensor>
+struct LandmarkStep {
+  robot::LandmarkObservation<Sensor> model;
+  robot::LandmarkDetections<Sensor> detections;
+  ObservationContext<Motion, robot::LandmarkObservation<Sensor>> ctx;
+
+  LandmarkStep(const Motion& motion, const Sensor& sensor, const std::vector<Landmark>& map,
+               std::span<const LabelledMeasurement> z, const Control& u,
+               AssociationOptions association = {})
+      : model(sensor, landmark_map(map), association), detections(model.view(z)) {
+    ctx.motion = &motion;
+    ctx.observation = &model;
+    ctx.u = u;
+    ctx.z = &detections;
+  }
+  LandmarkStep(const LandmarkStep&) = delete;
+  LandmarkStep& operator=(const LandmarkStep&) = delete;
+
+  static LandmarkMap landmark_map(const std::vector<Landmark>& map) {
+    LandmarkMap m;
+    for (std::size_t i = 0; i < map.size(); ++i) m.add(static_cast<int>(i), map[i]);
+    return m;
+  }
+};
+
 // F^j of spec §3.3 WITHOUT constants, for the §3.7 tables.
 MclObjective<RangeBearingSensor> oracle_objective(const std::vector<Landmark>& m,
                                                   const std::vector<Measurement>& z,
@@ -254,20 +281,10 @@ TEST(ImplicitProposal, FastPathsGiveTheSameUpdateAsTheInterfaces) {
   for (int k : {0, 1, 3}) z.push_back({sensor.predict(truth, map[k]) + Vec<2>(0.05, -0.01), -1});
   const PlainUte plain_model{model};
   const PlainRangeBearing plain_sensor{sensor};
-  auto context = [&](const auto& motion, const auto& s) {
-    ProposalContext<std::decay_t<decltype(motion)>, std::decay_t<decltype(s)>> ctx;
-    ctx.motion = &motion;
-    ctx.sensor = &s;
-    ctx.map = map;
-    ctx.noise_information = sensor.noise_covariance().llt().solve(Mat2::Identity());
-    ctx.log_det_noise = std::log(sensor.noise_covariance().determinant());
-    ctx.log_clutter = robot::clutter_log_density(ctx.association.gate, sensor.noise_covariance());
-    ctx.u = u;
-    ctx.z = z;
-    return ctx;
-  };
-  const auto fast = context(model, sensor);
-  const auto slow = context(plain_model, plain_sensor);
+  const LandmarkStep fast_step(model, sensor, map, z, u);
+  const LandmarkStep slow_step(plain_model, plain_sensor, map, z, u);
+  const auto& fast = fast_step.ctx;
+  const auto& slow = slow_step.ctx;
   const ImplicitProposal implicit;
   const BootstrapProposal bootstrap;
   for (std::uint64_t j = 0; j < 50; ++j) {
@@ -347,26 +364,21 @@ TEST(MclOracle, PeriodicInHeading) {
 }
 
 // One update of the proposal from a fixed previous pose: increments and samples for M streams.
+// `gate`: the association's chi-square gate (also sets the clutter density p0).
 template <typename Proposal, typename Sensor>
 void one_step(const Proposal& p, const Sensor& sensor, const std::vector<Landmark>& map,
               const std::vector<LabelledMeasurement>& z, std::size_t m, std::vector<double>& log_w,
-              std::vector<Pose>& x, double clutter = 0.0) {
+              std::vector<Pose>& x, double gate = robot::kChiSquare2Dof99) {
   const UteModel model;
-  ProposalContext<UteModel, Sensor> ctx;
-  ctx.motion = &model;
-  ctx.sensor = &sensor;
-  ctx.map = map;
-  ctx.noise_information = sensor.noise_covariance().llt().solve(Mat2::Identity());
-  ctx.log_det_noise = std::log(sensor.noise_covariance().determinant());
-  ctx.log_clutter = clutter;
-  ctx.u = oracle_control();
-  ctx.z = z;
+  AssociationOptions association;
+  association.gate = gate;
+  const LandmarkStep step(model, sensor, map, z, oracle_control(), association);
   log_w.resize(m);
   x.resize(m);
   for (std::size_t j = 0; j < m; ++j) {
     Rng rng({11, 1, j, Proposal::kPurpose});
     ParticleStats st;
-    log_w[j] = p.propose(ctx, kPrevious, rng, x[j], st);
+    log_w[j] = p.propose(step.ctx, kPrevious, rng, x[j], st);
   }
 }
 
@@ -473,9 +485,9 @@ TEST(Association, GateAndClutterConstant) {
   const std::vector<LabelledMeasurement> far{{Measurement(3.0, 0.2), -1}};
   std::vector<double> lw;
   std::vector<Pose> x;
-  one_step(BootstrapProposal{}, sensor, map, far, 10, lw, x, lp0);
+  one_step(BootstrapProposal{}, sensor, map, far, 10, lw, x, 9.21);
   for (double l : lw) EXPECT_DOUBLE_EQ(l, lp0);
-  one_step(ImplicitProposal{}, sensor, map, far, 10, lw, x, lp0);
+  one_step(ImplicitProposal{}, sensor, map, far, 10, lw, x, 9.21);
   for (double l : lw) EXPECT_NEAR(l, lp0, 1e-9);  // F = prior + const: weight p0 exactly
   // ML picks the likelier of two candidates.
   const Pose pose(0, 0, kPi / 2);  // looking north: bearing pi/2 is straight ahead

@@ -4,13 +4,15 @@
 //
 // The target is t(x) = u(x) p(z | x) over poses x = (x, y, heading), with u uniform over the
 // landmarks' bounding box grown by a margin and over all headings, and p(z | x) the likelihood of
-// the bootstrap (detail::sensor_log_likelihood: ML association at x, clutter for the dropped).
+// the landmark observation model (robot/landmark_observation.hpp: ML association at x, clutter for
+// the dropped), which the bootstrap weights by.
 // Its mass sits near the minima of F(x) = -log p(z | x), usually several (a symmetric map, or
 // unlabelled detections that fit several places). They are found by a multi-start Newton:
 //
 //   PoseBounds b = map_bounds(map.positions(), 5.0);
-//   std::vector<Laplace<3>> modes = find_pose_modes(ctx, b, GlobalInitOptions{});
-//   sample_pose_mixture(ctx, modes, b, seed, step, particles, log_weights);
+//   const auto d = model.view(detections);           // robot::LandmarkDetections
+//   std::vector<Laplace<3>> modes = find_pose_modes(d, b, GlobalInitOptions{});
+//   sample_pose_mixture(d, modes, b, seed, step, particles, log_weights);
 //
 // find_pose_modes starts a Newton from every point of a coarse cover (grid in x, y; a few
 // headings), with the detections associated at the start under a pose covariance as coarse as
@@ -135,12 +137,13 @@ inline double pose_distance(const Pose& a, const Pose& b) {
 
 /// The association of every detection at x: labels kept; ML with pose covariance pose_cov (nullptr:
 /// Sigma2 alone, as in the likelihood).
-template <typename Ctx>
-int associate_all(const Ctx& ctx, const Pose& x, const Mat3* pose_cov, std::span<int> out) {
+template <typename Sensor>
+int associate_all(const robot::LandmarkDetections<Sensor>& d, const Pose& x, const Mat3* pose_cov,
+                  std::span<int> out) {
   int used = 0;
-  for (std::size_t i = 0; i < ctx.z.size(); ++i) {
-    const LabelledMeasurement& lz = ctx.z[i];
-    out[i] = lz.landmark >= 0 ? lz.landmark : associate(ctx, x, pose_cov, lz.z);
+  for (std::size_t i = 0; i < d.z.size(); ++i) {
+    const LabelledMeasurement& lz = d.z[i];
+    out[i] = lz.landmark >= 0 ? lz.landmark : d.model->associate(x, pose_cov, lz.z);
     used += out[i] >= 0 ? 1 : 0;
   }
   return used;
@@ -148,15 +151,16 @@ int associate_all(const Ctx& ctx, const Pose& x, const Mat3* pose_cov, std::span
 
 /// F(x) = -log p(z | x) of a fixed association: no prior, constants kept (1/2 log det 2 pi Sigma2
 /// per associated detection, -log p0 per dropped one when clutter is on).
-template <typename Ctx>
-void build_objective(const Ctx& ctx, std::span<const int> assoc,
-                     MclObjective<typename Ctx::SensorType>& obj) {
-  obj.reset(*ctx.sensor, ctx.noise_information, Pose::Zero(), Mat3::Zero(), 0.0);
-  const double per_term = kLog2Pi + 0.5 * ctx.log_det_noise;
-  for (std::size_t i = 0; i < ctx.z.size(); ++i) {
+template <typename Sensor>
+void build_objective(const robot::LandmarkDetections<Sensor>& d, std::span<const int> assoc,
+                     MclObjective<Sensor>& obj) {
+  const robot::LandmarkObservation<Sensor>& model = *d.model;
+  obj.reset(model.sensor(), model.noise_information(), Pose::Zero(), Mat3::Zero(), 0.0);
+  const double per_term = kLog2Pi + 0.5 * model.log_det_noise();
+  for (std::size_t i = 0; i < d.z.size(); ++i) {
     const int k = assoc[i];
-    if (k < 0 || !obj.add(ctx.map[static_cast<std::size_t>(k)], ctx.z[i].z)) {
-      if (ctx.association.clutter) obj.add_constant(-ctx.log_clutter);
+    if (k < 0 || !obj.add(model.landmarks()[static_cast<std::size_t>(k)], d.z[i].z)) {
+      if (model.association().clutter) obj.add_constant(-model.log_clutter());
       continue;
     }
     obj.add_constant(per_term);
@@ -165,20 +169,21 @@ void build_objective(const Ctx& ctx, std::span<const int> assoc,
 
 /// One start of the cover: Newton from x0 with the association at x0, then polishing rounds.
 /// Returns false when the start is skipped (too few detections) or gives no usable minimum.
-template <typename Ctx>
-bool newton_from_start(const Ctx& ctx, const Pose& x0, const Mat3& cover_cov,
-                       const GlobalInitOptions& o, PoseMinimum& out, bool& skipped) {
-  constexpr std::size_t kMax = MclObjective<typename Ctx::SensorType>::kMaxTerms;
+template <typename Sensor>
+bool newton_from_start(const robot::LandmarkDetections<Sensor>& d, const Pose& x0,
+                       const Mat3& cover_cov, const GlobalInitOptions& o, PoseMinimum& out,
+                       bool& skipped) {
+  constexpr std::size_t kMax = MclObjective<Sensor>::kMaxTerms;
   // F holds at most kMax terms: further detections enter phi as clutter (the modes are only a
   // proposal, so this costs efficiency, never exactness).
-  const std::size_t n = std::min(ctx.z.size(), kMax);
+  const std::size_t n = std::min(d.z.size(), kMax);
   std::array<int, kMax> a{}, b{};
   const std::span<int> assoc(a.data(), n), next(b.data(), n);
-  Ctx head = ctx;
-  head.z = ctx.z.first(n);
+  robot::LandmarkDetections<Sensor> head = d;
+  head.z = d.z.first(n);
   skipped = associate_all(head, x0, &cover_cov, assoc) < o.min_detections;
   if (skipped) return false;
-  MclObjective<typename Ctx::SensorType> obj;
+  MclObjective<Sensor> obj;
   Pose start = x0;
   int evaluations = 0;
   for (int round = 0;; ++round) {
@@ -192,8 +197,8 @@ bool newton_from_start(const Ctx& ctx, const Pose& x0, const Mat3& cover_cov,
     start = out.x;
   }
   out.evaluations = evaluations;
-  if (ctx.z.size() > n && ctx.association.clutter)  // the detections F could not hold
-    out.value -= static_cast<double>(ctx.z.size() - n) * ctx.log_clutter;
+  if (d.z.size() > n && d.model->association().clutter)  // the detections F could not hold
+    out.value -= static_cast<double>(d.z.size() - n) * d.model->log_clutter();
   out.x(2) = wrap_angle(out.x(2));
   return usable(out) && out.converged() && out.x.allFinite() && std::isfinite(out.value);
 }
@@ -278,9 +283,9 @@ class WrappedMixture {
 /// heading std of at most pi/3; merge duplicates (keep the lowest phi); leave out the negligible
 /// (max_log_weight_gap) and those beyond max_modes. Returns the Laplace<3>
 /// components (headings in [-pi, pi)), sorted by phi. Parallel over starts, deterministic.
-template <typename Ctx>
-std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
-                                        const GlobalInitOptions& o,
+template <typename Sensor>
+std::vector<Laplace<3>> find_pose_modes(const robot::LandmarkDetections<Sensor>& d,
+                                        const PoseBounds& b, const GlobalInitOptions& o,
                                         GlobalInitStats* stats = nullptr) {
   require(o.cover_spacing > 0 && std::isfinite(o.cover_spacing),
           "global localization: expected a positive cover spacing, got {}", o.cover_spacing);
@@ -316,7 +321,7 @@ std::vector<Laplace<3>> find_pose_modes(const Ctx& ctx, const PoseBounds& b,
                       std::min(b.y_min + (static_cast<double>(iy) + 0.5) * s, b.y_max),
                       -kPi + 2.0 * dh * static_cast<double>(ih));
         bool skipped = false;
-        const bool ok = detail::newton_from_start(ctx, x0, cover_cov, o, found[i], skipped);
+        const bool ok = detail::newton_from_start(d, x0, cover_cov, o, found[i], skipped);
         status[i] = skipped ? 1 : (ok && b.contains(found[i].x) ? 2 : 0);
       },
       4);
@@ -377,9 +382,9 @@ inline Pose uniform_pose(const PoseBounds& b, Rng& rng) {
 /// defensive: the proposal is (1 - eps) q + eps u, eps = uniform_fraction in [0, 1). A draw takes
 /// one uniform u0 from its stream: u0 < eps gives a uniform pose (three more uniforms), else the
 /// component choice (u0 - eps) / (1 - eps) and three normals. Its log weight is
-/// log u(x) + detail::sensor_log_likelihood(ctx, x) - log proposal(x) (-inf outside the box), with
-/// q summed over the heading's 2 pi shifts (detail::WrappedMixture). Throws InvalidArgument when
-/// `modes` is empty (no pose explains the detections).
+/// log u(x) + log p(z | x) - log proposal(x) (-inf outside the box; p: the model's likelihood),
+/// with q summed over the heading's 2 pi shifts (detail::WrappedMixture). Throws InvalidArgument
+/// when `modes` is empty (no pose explains the detections).
 class PoseMixtureSampler {
  public:
   PoseMixtureSampler(std::vector<Laplace<3>> modes, const PoseBounds& b,
@@ -395,8 +400,8 @@ class PoseMixtureSampler {
     log_mix_ = std::log1p(-eps_);
   }
 
-  template <typename Ctx>
-  double draw(const Ctx& ctx, Rng& rng, Pose& x) const {
+  template <typename Sensor>
+  double draw(const robot::LandmarkDetections<Sensor>& d, Rng& rng, Pose& x) const {
     const double u = rng.uniform();
     if (u < eps_) {
       x = uniform_pose(bounds_, rng);
@@ -406,13 +411,12 @@ class PoseMixtureSampler {
       x(2) = wrap_angle(x(2));
     }
     if (!x.allFinite() || !bounds_.contains(x)) return -std::numeric_limits<double>::infinity();
-    ParticleStats st;
     double log_q = log_mix_ + q_.log_density(x);
     if (eps_ > 0) {  // log((1 - eps) q + eps u)
       const double hi = std::max(log_q, log_eps_u_), lo = std::min(log_q, log_eps_u_);
       log_q = hi + std::log1p(std::exp(lo - hi));
     }
-    return log_u_ + detail::sensor_log_likelihood(ctx, x, st) - log_q;
+    return log_u_ + d.model->log_likelihood(d, x) - log_q;
   }
 
  private:
@@ -432,8 +436,9 @@ class PoseMixtureSampler {
 
 /// Draws particles with PoseMixtureSampler; particle j uses Rng({seed, step, j,
 /// purpose::kGlobalInit}). Parallel over particles, bit-identical for any thread count.
-template <typename Ctx>
-void sample_pose_mixture(const Ctx& ctx, const std::vector<Laplace<3>>& modes, const PoseBounds& b,
+template <typename Sensor>
+void sample_pose_mixture(const robot::LandmarkDetections<Sensor>& d,
+                         const std::vector<Laplace<3>>& modes, const PoseBounds& b,
                          std::uint64_t seed, std::uint64_t step, std::span<Pose> particles,
                          std::span<double> log_weights, double uniform_fraction = 0.0) {
   require(particles.size() == log_weights.size(),
@@ -442,7 +447,7 @@ void sample_pose_mixture(const Ctx& ctx, const std::vector<Laplace<3>>& modes, c
   const PoseMixtureSampler sampler(modes, b, uniform_fraction);
   parallel_for(particles.size(), [&](std::size_t j) {
     Rng rng({.seed = seed, .step = step, .index = j, .purpose = purpose::kGlobalInit});
-    log_weights[j] = sampler.draw(ctx, rng, particles[j]);
+    log_weights[j] = sampler.draw(d, rng, particles[j]);
   });
 }
 

@@ -44,7 +44,8 @@ struct GlobalOptions {
 };
 
 /// Recovery's source (recovery.hpp) over the pose box: uniform, or the mixture over the minima of
-/// -log p(z | x) for the current detections (found once per step in prepare()).
+/// -log p(z | x) for the current detections (found once per step in prepare()). Ctx is the
+/// filter's Context on landmark detections (its z: robot::LandmarkDetections).
 template <typename Ctx>
 class PoseRecoverySource : public RecoverySource<Ctx> {
  public:
@@ -55,7 +56,7 @@ class PoseRecoverySource : public RecoverySource<Ctx> {
   bool prepare(const Ctx& ctx) override {
     sampler_.reset();
     if (source_ == GlobalSource::kUniform) return true;
-    std::vector<Laplace<3>> modes = find_pose_modes(ctx, bounds_, init_);
+    std::vector<Laplace<3>> modes = find_pose_modes(*ctx.z, bounds_, init_);
     if (modes.empty()) return false;  // e.g. one detection: F has no isolated minimum
     sampler_.emplace(std::move(modes), bounds_, uniform_fraction_);
     return true;
@@ -64,10 +65,9 @@ class PoseRecoverySource : public RecoverySource<Ctx> {
   double draw(const Ctx& ctx, Rng& rng, Pose& x) const override {
     if (source_ == GlobalSource::kUniform) {
       x = uniform_pose(bounds_, rng);
-      ParticleStats st;
-      return detail::sensor_log_likelihood(ctx, x, st);  // log u - log g = 0
+      return ctx.observation->log_likelihood(*ctx.z, x);  // log u - log g = 0
     }
-    return sampler_->draw(ctx, rng, x);
+    return sampler_->draw(*ctx.z, rng, x);
   }
 
  private:
@@ -116,7 +116,7 @@ LocalizationRun run_global_localization(const LocalizationProblem& problem, cons
   run.steps.reserve(steps - first);
   if (g.global_start) {
     // The first scan's particles: an importance sample of u(x) p(z | x).
-    const Ctx ctx = pf.context(problem.detections[first]);
+    const auto d = pf.context(problem.detections[first]);
     std::vector<Pose> x(options.particles);
     std::vector<double> lw(options.particles);
     if (modes.empty()) {
@@ -124,12 +124,9 @@ LocalizationRun run_global_localization(const LocalizationProblem& problem, cons
       // minimum: still an exact sample, only a less efficient one.
       run.uniform_start = g.source == GlobalSource::kMixture;
       sample_uniform_poses(bounds, options.seed, x);
-      parallel_for(x.size(), [&](std::size_t j) {
-        ParticleStats st;
-        lw[j] = detail::sensor_log_likelihood(ctx, x[j], st);
-      });
+      parallel_for(x.size(), [&](std::size_t j) { lw[j] = d.model->log_likelihood(d, x[j]); });
     } else {
-      sample_pose_mixture(ctx, modes, bounds, options.seed, first, x, lw, g.uniform_fraction);
+      sample_pose_mixture(d, modes, bounds, options.seed, first, x, lw, g.uniform_fraction);
     }
     pf.initialize(x, lw);
     run.steps.push_back(pf.last());  // the first scan's particles are its summary

@@ -32,6 +32,7 @@
 #include "implicit/core/newton.hpp"
 #include "implicit/core/types.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/robot/landmark_observation.hpp"
 #include "implicit/robot/models.hpp"
 
 namespace implicit::filter {
@@ -47,7 +48,8 @@ using robot::Pose;
 template <robot::LandmarkSensor Sensor>
 class MclObjective {
  public:
-  static constexpr int kMaxTerms = 32;  ///< detections per update (the Car Park has at most 6)
+  /// Detections per update (the Car Park has at most 6): what the landmark model accepts.
+  static constexpr int kMaxTerms = robot::kMaxDetectionsPerStep;
 
   /// Starts a new F: prior N(prediction, prior_information^-1), no measurement terms.
   void reset(const Sensor& sensor, const Mat2& noise_information, const Pose& prediction,

@@ -1,8 +1,9 @@
 #pragma once
-// Monte Carlo localization on any observation model (robot/observation_model.hpp): a laser scan
-// against an occupancy grid (robot/likelihood_field.hpp), or a sensor of your own. The engine
-// (particle_engine.hpp), the proposals (proposals.hpp: bootstrap and implicit), KLD-sampling
-// (kld.hpp) and recovery (recovery.hpp) are the ones of the landmark filter (particle_filter.hpp).
+// Monte Carlo localization on any observation model (robot/observation_model.hpp): landmark
+// detections (robot/landmark_observation.hpp; particle_filter.hpp names this filter with it), a
+// laser scan against an occupancy grid (robot/likelihood_field.hpp), or a sensor of your own. The
+// engine (particle_engine.hpp), the proposals (proposals.hpp: bootstrap and implicit),
+// KLD-sampling (kld.hpp) and recovery (recovery.hpp) are the same for all of them.
 //
 //   using namespace implicit;
 //   robot::LikelihoodFieldModel laser(field, robot::LikelihoodFieldParams{}, mount);
@@ -18,13 +19,22 @@
 // then moves every particle with the proposal in parallel; particle j draws from
 // Rng({seed, step, j, purpose}), so results are bit-identical for any thread count. Weights are
 // normalised in the log domain; the filter resamples when ESS < threshold * M (or at every
-// update under KLD-sampling). FilterOptions::association is not used here (it is the landmark
-// sensor's).
+// update under KLD-sampling). A step may also weight by a PositionFix (GPS) of the new state.
+//
+// Per-step outputs (StepSummary): weighted mean pose (heading by circular mean), covariance
+// (heading deviations wrapped), ESS, whether it resampled, and the log marginal-likelihood
+// increment log sum_j wbar^j_{n-1} exp(delta l^j) - a "lost" signal: it drops sharply when no
+// particle explains the data. ESS alone is not a health signal (it can be high in a lost filter).
 //
 // The implicit proposal needs the model's derivatives: a model that is not differentiable (e.g.
 // the likelihood field with nav2's cubed-sum aggregation) is refused at construction, with the
 // model's reason.
+//
+// Common mistakes: reusing one Rng stream for two purposes (use distinct purposes), reading the
+// heading mean as the plain average of angles (use StepSummary::mean), and comparing
+// log-likelihood increments between runs with different clutter settings.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -40,9 +50,9 @@
 #include "implicit/core/resampling.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/filter/filter_options.hpp"
 #include "implicit/filter/kld.hpp"
 #include "implicit/filter/particle_engine.hpp"
-#include "implicit/filter/particle_filter.hpp"
 #include "implicit/filter/pose_moments.hpp"
 #include "implicit/filter/proposals.hpp"
 #include "implicit/filter/recovery.hpp"
@@ -69,6 +79,7 @@ class MonteCarloLocalization {
   MonteCarloLocalization(Motion motion, Observation observation, Proposal proposal,
                          FilterOptions options)
       : motion_(std::move(motion)),
+        step_motion_(motion_),
         observation_(std::move(observation)),
         proposal_(std::move(proposal)),
         options_(options) {
@@ -120,6 +131,15 @@ class MonteCarloLocalization {
     restart();
   }
 
+  /// Starts from given particles with equal weights (as many as the filter has).
+  void initialize(std::span<const robot::Pose> particles) {
+    require(particles.size() == engine_.size(),
+            "particle filter: expected {} initial particles, got {}", engine_.size(),
+            particles.size());
+    engine_.assign(particles);
+    restart();
+  }
+
   /// Starts from weighted particles (log weights, any common offset), e.g. a global start; the
   /// particle count becomes particles.size().
   void initialize(std::span<const robot::Pose> particles, std::span<const double> log_weights) {
@@ -128,25 +148,47 @@ class MonteCarloLocalization {
     restart();
   }
 
+  /// The length of the following steps [s] (the data's own time stamps; until called, the
+  /// model's dt()). A model without with_dt() accepts only its own dt (within 1e-9 s).
+  void set_step_length(double dt) requires robot::MotionModel<Motion> {
+    require(dt > 0 && std::isfinite(dt), "particle filter: expected a positive step length, got {}",
+            dt);
+    if constexpr (robot::VariableStepMotionModel<Motion>) {
+      step_motion_ = motion_.with_dt(dt);
+    } else {
+      require(std::abs(dt - motion_.dt()) <= 1e-9,
+              "particle filter: expected steps of the motion model's fixed length {} s (it has "
+              "no with_dt()), got a step of {} s",
+              motion_.dt(), dt);
+    }
+  }
+
   /// The observation prepared as the model would at a step (for global starts and tools).
   Prepared prepare(const typename Observation::Observation& z, std::string_view where) const {
     return observation_.prepare(z, where);
   }
 
   /// One motion step with control u, no observation: the weights are unchanged.
-  const StepSummary& step(const Control& u) { return step_impl(u, nullptr, 0); }
+  const StepSummary& step(const Control& u) { return step_impl(u, nullptr, 0, nullptr); }
 
   /// One motion step with control u and the observation seen after it; `where` names it in
   /// errors (e.g. the file and line).
   const StepSummary& step(const Control& u, const typename Observation::Observation& z,
                           std::string_view where = "observation") {
     prepared_ = observation_.prepare(z, where);
-    return step_impl(u, &prepared_, observation_size(prepared_));
+    return step_impl(u, &prepared_, observation_size(prepared_), nullptr);
   }
 
   /// A step with an observation prepared by prepare().
   const StepSummary& step_prepared(const Control& u, const Prepared& z) {
-    return step_impl(u, &z, observation_size(z));
+    return step_impl(u, &z, observation_size(z), nullptr);
+  }
+
+  /// A step with an optional prepared observation (nullptr: none) that also weights by a
+  /// position fix (GPS) of the new state (nullptr: none).
+  const StepSummary& step_prepared(const Control& u, const Prepared* z, const PositionFix* fix) {
+    if (fix) validate(*fix);
+    return step_impl(u, z, z ? observation_size(*z) : 0, fix);
   }
 
  private:
@@ -164,9 +206,10 @@ class MonteCarloLocalization {
     summarize();
   }
 
-  const StepSummary& step_impl(const Control& u, const Prepared* z, int terms) {
+  const StepSummary& step_impl(const Control& u, const Prepared* z, int terms,
+                               const PositionFix* fix) {
     ++step_;
-    context_.motion = &motion_;
+    context_.motion = &step_motion_;  // refreshed: the filter may have been moved since then
     context_.observation = &observation_;
     context_.u = u;
     context_.z = z;
@@ -177,6 +220,7 @@ class MonteCarloLocalization {
       injected_[j] = 0;
       const robot::Pose previous = x;
       if (p > 0.0) {
+        // The choice has its own stream: the proposal's draws do not depend on it.
         Rng choice({options_.seed, n, j, purpose::kRecovery});
         if (choice.uniform() < p) {
           injected_[j] = 1;
@@ -186,27 +230,55 @@ class MonteCarloLocalization {
       Rng rng({options_.seed, n, j, Proposal::kPurpose});
       return proposal_.propose(context_, previous, rng, x, stats_[j]) + kept_log_weight_;
     });
+    if (fix) weight_by(*fix);
     summary_ = StepSummary{};
     summary_.step = step_;
-    summary_.updated = z != nullptr;
-    for (const ParticleStats& s : stats_) {
-      summary_.newton_evaluations += s.iterations;
-      summary_.fallbacks += s.fallback ? 1 : 0;
-      summary_.failures += s.failed ? 1 : 0;
-    }
-    summary_.newton_evaluations /= static_cast<double>(stats_.size());
-    summary_.detections_used = terms;
-    summary_.injection_probability = p;
-    for (char c : injected_) summary_.injected += c;
+    summary_.updated = z != nullptr || fix != nullptr;
+    collect_stats(terms, p);
     if (summary_.updated || summary_.failures > 0) update_weights();
     if (options_.recovery.enabled && z != nullptr) {
-      if (p == 0.0) summary_.log_likelihood_increment += std::log1p(-options_.recovery.kidnap_probability);
+      // With p = 0 the factor 1 - epsilon of the motion branch is common to all particles and
+      // was left out of the weights (bit-identical to a filter without recovery); it belongs to
+      // the likelihood of the data all the same.
+      if (p == 0.0)
+        summary_.log_likelihood_increment += std::log1p(-options_.recovery.kidnap_probability);
       averages_.update(summary_.log_likelihood_increment, std::max(terms, 1), options_.recovery);
     }
     summarize();
     return summary_;
   }
 
+  /// The fix multiplies the target, not the proposal: valid importance sampling.
+  void weight_by(const PositionFix& fix) {
+    const double info = 1.0 / (fix.std * fix.std);
+    const double norm = -kLog2Pi - 2.0 * std::log(fix.std);  // log N(0; 0, std^2 I)
+    const std::span<const robot::Pose> xs = engine_.particles();
+    const std::span<double> inc = engine_.increments();
+    for (std::size_t j = 0; j < xs.size(); ++j)
+      inc[j] += norm - 0.5 * info * (xs[j].template head<2>() - fix.position).squaredNorm();
+  }
+
+  /// The proposals' per-particle counts into the summary: a counting model's used and dropped
+  /// parts weighted by the previous weights, else the observation's parts.
+  void collect_stats(int terms, double p) {
+    const std::span<const double> w = engine_.weights();
+    for (std::size_t j = 0; j < stats_.size(); ++j) {
+      if constexpr (robot::CountingObservationModel<Observation>) {
+        summary_.detections_used += w[j] * stats_[j].used;
+        summary_.detections_dropped += w[j] * stats_[j].dropped;
+      }
+      summary_.newton_evaluations += stats_[j].iterations;
+      summary_.fallbacks += stats_[j].fallback ? 1 : 0;
+      summary_.failures += stats_[j].failed ? 1 : 0;
+    }
+    summary_.newton_evaluations /= static_cast<double>(stats_.size());
+    if constexpr (!robot::CountingObservationModel<Observation>) summary_.detections_used = terms;
+    summary_.injection_probability = p;
+    for (char c : injected_) summary_.injected += c;
+  }
+
+  /// The fraction of this step's particles drawn from the recovery source (0 without one, or
+  /// without an observation to weight them by), and the log weight factors of both branches.
   double injection_probability(bool observed) {
     injected_log_weight_ = kept_log_weight_ = 0.0;
     if (!options_.recovery.enabled || !recovery_source_ || !observed) return 0.0;
@@ -227,9 +299,10 @@ class MonteCarloLocalization {
     const Reweighting r = engine_.reweight();
     summary_.log_likelihood_increment = r.log_likelihood_increment;
     summary_.all_weights_zero = r.all_weights_zero;
-    summary_.ess = r.ess;
+    summary_.ess = r.ess;  // before resampling: the quality of this update's weights
     const std::size_t m = engine_.size();
     if (options_.kld.enabled) {
+      // KLD-sampling draws as many ancestors as the occupied bins call for, at every update.
       Rng rng({options_.seed, step_, 0, purpose::kResampling});
       engine_.resample(kld_resample(engine_.weights(), engine_.particles(), options_.kld, rng));
       resize_scratch(engine_.size());
@@ -242,8 +315,9 @@ class MonteCarloLocalization {
   }
 
   void summarize() {
-    const auto& moments = pose_moments_(engine_.particles(), engine_.weights(),
-                                        [](const robot::Pose& x) -> const robot::Pose& { return x; });
+    const auto& moments =
+        pose_moments_(engine_.particles(), engine_.weights(),
+                      [](const robot::Pose& x) -> const robot::Pose& { return x; });
     summary_.mean = moments.mean;
     summary_.covariance = moments.covariance;
     summary_.particles = engine_.size();
@@ -251,6 +325,7 @@ class MonteCarloLocalization {
   }
 
   Motion motion_;
+  Motion step_motion_;  ///< motion_ for the current step length
   Observation observation_;
   Proposal proposal_;
   FilterOptions options_;

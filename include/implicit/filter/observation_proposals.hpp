@@ -1,7 +1,8 @@
 #pragma once
 // The two proposals for any observation model (robot/observation_model.hpp): what
-// BootstrapProposal and ImplicitProposal (proposals.hpp) do at a step of a filter on the
-// generic seam (monte_carlo_localization.hpp).
+// BootstrapProposal and ImplicitProposal (proposals.hpp) do at a step of the filter
+// (monte_carlo_localization.hpp). Landmark detections take the bootstrap below and an implicit
+// path of their own (proposals.hpp: association at the prediction, range-bearing objective).
 //
 //   bootstrap: X ~ N(f, Sigma1), log w += log p(z | X)
 //   implicit:  minimise F = prior + observation terms (pose_objective.hpp), X = mu + L^-T xi
@@ -23,7 +24,6 @@
 #include <limits>
 
 #include "implicit/core/gaussian_factor.hpp"
-#include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/filter/pose_objective.hpp"
@@ -56,6 +56,40 @@ bool predict_pose(const Motion& motion, const robot::Pose& previous,
   return f.allFinite() && sigma1.allFinite() && factor.compute(sigma1);
 }
 
+/// The particle's prediction f, Sigma1 and its factor at the step's control; false, with the
+/// particle kept at `previous` and marked failed (weight zero), when Sigma1 is not SPD or f is
+/// not finite.
+template <typename Ctx, typename Stats>
+bool predict_particle(const Ctx& ctx, const robot::Pose& previous, robot::Pose& f,
+                      robot::Mat3& sigma1_full, SmallFactor<3>& sigma1, robot::Pose& next,
+                      Stats& st) {
+  if (predict_pose(*ctx.motion, previous, ctx.u, f, sigma1_full, sigma1)) return true;
+  st.failed = true;
+  next = previous;
+  return false;
+}
+
+/// The kernel's maps and weight (spec §1.2, §1.3) at the usable minimum nr of obj, with the
+/// factor used at mu: the implicit proposals' sample x = map(xi) and its log weight (-inf, and
+/// the particle marked failed, when it is not finite).
+template <typename Objective, typename MapKind, typename Stats>
+double sample_at_minimum(const Objective& obj, const NewtonMinimum<SmallFactor<3>>& nr, MapKind map,
+                         const Vec<3>& xi, robot::Pose& next, Stats& st) {
+  constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+  double log_w = kNegInf;
+  if (map == MapKind::kLinear) {
+    log_w = linear_map(obj, nr.x, nr.factor, xi, next);
+  } else if (implicit::random_map(obj, nr.x, nr.value, nr.factor, xi, next, log_w) !=
+             RayStatus::kOk) {
+    next = nr.x;  // weight zero: no root on the ray
+  }
+  if (!std::isfinite(log_w)) {
+    st.failed = true;
+    return kNegInf;
+  }
+  return log_w;
+}
+
 template <typename Motion, typename Observation, typename Stats>
 double bootstrap_step(const ObservationContext<Motion, Observation>& ctx,
                       const robot::Pose& previous, Rng& rng, robot::Pose& next, Stats& st) {
@@ -63,15 +97,15 @@ double bootstrap_step(const ObservationContext<Motion, Observation>& ctx,
   robot::Pose f;
   robot::Mat3 sigma1_full;
   SmallFactor<3> sigma1;
-  if (!predict_pose(*ctx.motion, previous, ctx.u, f, sigma1_full, sigma1)) {
-    st.failed = true;
-    next = previous;
-    return kNegInf;
-  }
+  if (!predict_particle(ctx, previous, f, sigma1_full, sigma1, next, st)) return kNegInf;
   const Vec<3> xi = rng.normal_vector<3>();  // one call: argument order is unspecified
   next = f + sigma1.matrixL() * xi;
   if (ctx.z == nullptr) return 0.0;
-  const double log_w = ctx.observation->log_likelihood(*ctx.z, next);
+  double log_w = 0.0;
+  if constexpr (robot::CountingObservationModel<Observation>)
+    log_w = ctx.observation->log_likelihood(*ctx.z, next, st);  // counts used and dropped parts
+  else
+    log_w = ctx.observation->log_likelihood(*ctx.z, next);
   if (std::isnan(log_w) || log_w == std::numeric_limits<double>::infinity()) {
     st.failed = true;
     return kNegInf;
@@ -81,17 +115,13 @@ double bootstrap_step(const ObservationContext<Motion, Observation>& ctx,
 
 template <typename Motion, typename Observation, typename Stats, typename MapKind>
 double implicit_step(const ObservationContext<Motion, Observation>& ctx, MapKind map,
-                     const NewtonOptions& newton, int starts, const robot::Pose& previous,
-                     Rng& rng, robot::Pose& next, Stats& st) {
+                     const NewtonOptions& newton, int starts, const robot::Pose& previous, Rng& rng,
+                     robot::Pose& next, Stats& st) {
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
   robot::Pose f;
   robot::Mat3 sigma1_full;
   SmallFactor<3> sigma1;
-  if (!predict_pose(*ctx.motion, previous, ctx.u, f, sigma1_full, sigma1)) {
-    st.failed = true;
-    next = previous;
-    return kNegInf;
-  }
+  if (!predict_particle(ctx, previous, f, sigma1_full, sigma1, next, st)) return kNegInf;
   const Vec<3> xi = rng.normal_vector<3>();
   if (ctx.z == nullptr) {  // F is the Gaussian prior: mu = f, all weights equal
     next = f + sigma1.matrixL() * xi;
@@ -130,18 +160,7 @@ double implicit_step(const ObservationContext<Motion, Observation>& ctx, MapKind
     }
     return lw;
   }
-  double log_w = kNegInf;
-  if (map == MapKind::kLinear) {
-    log_w = linear_map(obj, nr.x, nr.factor, xi, next);
-  } else if (implicit::random_map(obj, nr.x, nr.value, nr.factor, xi, next, log_w) !=
-             RayStatus::kOk) {
-    next = nr.x;  // weight zero: no root on the ray
-  }
-  if (!std::isfinite(log_w)) {
-    st.failed = true;
-    return kNegInf;
-  }
-  return log_w;
+  return sample_at_minimum(obj, nr, map, xi, next, st);
 }
 
 }  // namespace detail

@@ -102,8 +102,9 @@ class LikelihoodAverages {
 };
 
 /// Where recovery draws its particles: prepared once per update step, then drawn per particle
-/// (from several threads at once: draw must not change the source). `Context` is the engine's
-/// ProposalContext (the step's control, detections, sensor and map).
+/// (from several threads at once: draw must not change the source). `Context` is the filter's
+/// ObservationContext (the step's motion model, control, observation model and prepared
+/// observation).
 template <typename Context>
 class RecoverySource {
  public:

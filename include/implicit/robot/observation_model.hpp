@@ -22,6 +22,10 @@
 // Gauss-Newton matrix must be positive semi-definite: with the motion prior, F's matrix is then
 // positive definite and the implicit weights are exact.
 //
+// An observation model may also count, per pose, what it used and what it dropped (landmark
+// detections outside the association gate): log_likelihood(z, x, counts)
+// (CountingObservationModel).
+//
 // A motion model gives the Gaussian transition x_n ~ N(predict(x, u), process_covariance(x, u))
 // for its own Control type (a Vec<2> speed and steering for the Ute, an odometry increment for
 // OdometryModel); a model without a `Control` member type takes robot::Control.
@@ -41,7 +45,7 @@ struct ControlOf {
   using type = Control;
 };
 template <typename M>
-  requires requires { typename M::Control; }
+requires requires { typename M::Control; }
 struct ControlOf<M> {
   using type = typename M::Control;
 };
@@ -82,6 +86,21 @@ concept DifferentiableObservationModel = ObservationModel<O> &&
   { o.negative_log_likelihood(p, x, g, h) } -> std::convertible_to<double>;
   { o.differentiable() } -> std::convertible_to<bool>;
   { o.why_not_differentiable() } -> std::convertible_to<std::string_view>;
+};
+
+/// What an observation model may count per pose: the parts of the observation it used and the
+/// ones it dropped (landmark detections outside the association gate).
+struct ObservationCounts {
+  int used = 0;
+  int dropped = 0;
+};
+
+/// An observation model that counts them: log_likelihood(z, x, counts) is log_likelihood(z, x)
+/// and ADDS to counts.used and counts.dropped. The filters then report the weighted mean counts.
+template <typename O>
+concept CountingObservationModel = ObservationModel<O> &&
+    requires(const O& o, const typename O::Prepared& p, const Pose& x, ObservationCounts& c) {
+  { o.log_likelihood(p, x, c) } -> std::convertible_to<double>;
 };
 
 }  // namespace implicit::robot
