@@ -31,7 +31,7 @@ truth 0 1 2 0
 truth 1 1.5 2
 )";
 
-RobotLog parse(const std::string& text) {
+RobotLog parse_laser_log(const std::string& text) {
   std::istringstream in(text);
   return parse_robot_log(in, "laser.log");
 }
@@ -43,7 +43,7 @@ std::string write(const RobotLog& log) {
 }
 
 TEST(RobotLogLaser, ParsesEveryRecord) {
-  const RobotLog log = parse(kLaserLog);
+  const RobotLog log = parse_laser_log(kLaserLog);
   ASSERT_TRUE(log.map.has_value());
   EXPECT_EQ(log.map->file, "maps/lab.yaml");
   EXPECT_EQ(log.map->line, 2u);
@@ -74,14 +74,14 @@ TEST(RobotLogLaser, ParsesEveryRecord) {
 
 // Written with 17 significant digits, read back bit for bit, and written again identically.
 TEST(RobotLogLaser, RoundTripsEveryRecordExactly) {
-  RobotLog log = parse(kLaserLog);
+  RobotLog log = parse_laser_log(kLaserLog);
   // Values that a shorter format would round: 0.1 + 0.2, pi / 3, a subnormal-free tiny number.
   log.odometry.push_back({1.5, Pose(0.1 + 0.2, kPi / 3, -1e-300)});
   log.laser_scans.push_back(log.laser_scans[0]);
   log.laser_scans.back().time = 1.25;
   log.laser_scans.back().ranges[0] = 1.0 / 3.0;
   const std::string text = write(log);
-  const RobotLog again = parse(text);
+  const RobotLog again = parse_laser_log(text);
   ASSERT_TRUE(again.map && again.laser_mount);
   EXPECT_EQ(again.map->file, log.map->file);
   EXPECT_EQ(again.laser_mount->x, log.laser_mount->x);
@@ -104,9 +104,9 @@ TEST(RobotLogLaser, RoundTripsEveryRecordExactly) {
   }
   EXPECT_EQ(write(again), text);
   // Optional records stay absent.
-  const RobotLog bare = parse("odometry 0 0 0 0\n");
-  EXPECT_FALSE(parse(write(bare)).map.has_value());
-  EXPECT_FALSE(parse(write(bare)).laser_mount.has_value());
+  const RobotLog bare = parse_laser_log("odometry 0 0 0 0\n");
+  EXPECT_FALSE(parse_laser_log(write(bare)).map.has_value());
+  EXPECT_FALSE(parse_laser_log(write(bare)).laser_mount.has_value());
 }
 
 TEST(RobotLogLaser, AMapFileThatCannotBeOneWordIsNotWritten) {
@@ -118,7 +118,7 @@ TEST(RobotLogLaser, AMapFileThatCannotBeOneWordIsNotWritten) {
   EXPECT_THROW(write_robot_log(out, log), InvalidArgument);
 }
 
-struct BadCase {
+struct LaserBadCase {
   const char* text;
   const char* expected;  // substring of the message
 };
@@ -160,7 +160,7 @@ TEST(RobotLogLaser, RejectsMalformedRecordsNamingLineAndField) {
   };
   for (const auto& [text, expected] : rows) {
     try {
-      parse(text);
+      parse_laser_log(text);
       ADD_FAILURE() << "accepted: " << text;
     } catch (const ParseError& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos)
@@ -197,8 +197,8 @@ TEST(RobotLogLaser, MapFileIsRelativeToTheLogsFolderAndMustExist) {
   const RobotLog log = read_robot_log(dir / "run.log");
   EXPECT_EQ(map_file(log), dir / "maps/lab.yaml");
   // An absolute name is kept as it is; a log without the record has no map file.
-  EXPECT_EQ(map_file(parse("map /data/lab.yaml\n")), std::filesystem::path("/data/lab.yaml"));
-  EXPECT_EQ(map_file(parse("odometry 0 0 0 0\n")), std::filesystem::path());
+  EXPECT_EQ(map_file(parse_laser_log("map /data/lab.yaml\n")), std::filesystem::path("/data/lab.yaml"));
+  EXPECT_EQ(map_file(parse_laser_log("odometry 0 0 0 0\n")), std::filesystem::path());
   std::filesystem::remove_all(dir);
 }
 
@@ -218,7 +218,7 @@ TEST(RobotLogLaser, FormatIsToldFromTheFirstRecord) {
 // Odometry at scan times: linear between records, heading along the shorter arc (across +-pi
 // too), exact at a record, NaN outside the records' time span.
 TEST(RobotLogLaser, OdometryIsInterpolatedAtScanTimes) {
-  const RobotLog log = parse("odometry 0 0 0 0\nodometry 1 1 2 3.0\nodometry 2 1 2 -3.0\n");
+  const RobotLog log = parse_laser_log("odometry 0 0 0 0\nodometry 1 1 2 3.0\nodometry 2 1 2 -3.0\n");
   const std::vector<Pose> p = interpolate_odometry(log, {-0.5, 0.0, 0.25, 1.0, 1.5, 2.0, 2.5});
   ASSERT_EQ(p.size(), 7u);
   EXPECT_TRUE(std::isnan(p[0](0)));
@@ -231,9 +231,9 @@ TEST(RobotLogLaser, OdometryIsInterpolatedAtScanTimes) {
   EXPECT_NEAR(p[4](2), 3.0 + (2 * kPi - 6.0) / 2, 1e-12);
   EXPECT_EQ(p[5], Pose(1, 2, -3.0));
   EXPECT_TRUE(std::isnan(p[6](2)));
-  EXPECT_TRUE(std::isnan(interpolate_odometry(parse(""), {0.0})[0](0)));
+  EXPECT_TRUE(std::isnan(interpolate_odometry(parse_laser_log(""), {0.0})[0](0)));
   // Truth at arbitrary times agrees with its schedule form (same records, same rule).
-  const RobotLog truth = parse("truth 0 0 0 0\ntruth 0.5 1 0 1\ntruth 5 2 0\n");
+  const RobotLog truth = parse_laser_log("truth 0 0 0 0\ntruth 0.5 1 0 1\ntruth 5 2 0\n");
   const TruthTrack t = interpolate_truth(truth, std::vector<double>{0.25, 1.0});
   EXPECT_NEAR(t.position[0](0), 0.5, 1e-15);
   EXPECT_NEAR(t.heading[0], 0.5, 1e-15);
