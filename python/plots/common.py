@@ -40,6 +40,8 @@ import matplotlib
 matplotlib.use("Agg")  # no display: the report is drawn on servers and in CI
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.ticker import (FuncFormatter, LogLocator, MaxNLocator,  # noqa: E402
+                               NullFormatter)
 
 # One colour per role, used by every figure (close to the paper's turquoise/red pairs).
 COLORS = {
@@ -147,17 +149,68 @@ def load_results(directory):
         raise DataError(f"{path}:{e.lineno}: malformed JSON: {e.msg}") from e
 
 
-def subplots(nrows=1, ncols=1, width=None, height=None):
+def subplots(nrows=1, ncols=1, width=None, height=None, **kwargs):
     """A figure with the project's default size (about 5 x 4 inches per panel).
 
-    Like matplotlib's: one Axes for 1 x 1, a 1-D array for one row or column, else 2-D.
+    Like matplotlib's: one Axes for 1 x 1, a 1-D array for one row or column, else 2-D; other
+    keywords (sharey=True, ...) go to plt.subplots.
     """
-    return plt.subplots(nrows, ncols, figsize=(width or 5.0 * ncols, height or 4.0 * nrows))
+    return plt.subplots(nrows, ncols, figsize=(width or 5.0 * ncols, height or 4.0 * nrows),
+                        **kwargs)
+
+
+def labelled_ticks(axis):
+    """[(value, label)] of the ticks of `axis` (major and minor) inside its view interval whose
+    label is not empty, as the axis' locators and formatters give them."""
+    lo, hi = sorted(axis.get_view_interval())
+    out = []
+    for locs, formatter in ((axis.get_majorticklocs(), axis.get_major_formatter()),
+                            (axis.get_minorticklocs(), axis.get_minor_formatter())):
+        locs = [v for v in locs if lo <= v <= hi]
+        out += [(v, s) for v, s in zip(locs, formatter.format_ticks(locs)) if s.strip()]
+    return out
+
+
+# Tick labels on a log axis that spans little more than a decade: plain numbers ("0.02"), which
+# read without counting minor ticks, rather than powers of ten.
+_PLAIN = FuncFormatter(lambda v, _: f"{v:.6g}")
+
+
+def label_log_axis(axis):
+    """Makes a log axis show at least two labelled ticks.
+
+    Matplotlib labels only powers of ten (and, below about one decade, some minor ticks), so an
+    axis from 0.004 to 0.06 reads "10^-2" and nothing else: the reader cannot tell the scale.
+    Tries, in order, matplotlib's ticks, then 1-2-5 per decade, then every integer multiple, then
+    evenly spaced round numbers (a range narrower than a factor 10/9); call it once the limits are
+    final (save() does, for every log axis of the figure).
+    """
+    if axis.get_scale() != "log" or len(labelled_ticks(axis)) >= 2:
+        return
+    for subs in ((1.0, 2.0, 5.0), tuple(float(k) for k in range(1, 10))):
+        axis.set_major_locator(LogLocator(base=10, subs=subs, numticks=30))
+        axis.set_major_formatter(_PLAIN)
+        axis.set_minor_locator(LogLocator(base=10, subs=tuple(range(1, 10)), numticks=30))
+        axis.set_minor_formatter(NullFormatter())
+        if len(labelled_ticks(axis)) >= 2:
+            return
+    axis.set_major_locator(MaxNLocator(nbins=4, min_n_ticks=2))
+
+
+def label_log_axes(fig):
+    """label_log_axis for both axes of every panel of `fig`."""
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            label_log_axis(axis)
 
 
 def save(fig, directory, number):
-    """Writes DIR/figureN.png (150 dpi) and DIR/figureN.svg, and closes the figure."""
+    """Writes DIR/figureN.png (150 dpi) and DIR/figureN.svg, and closes the figure.
+
+    Every log axis gets at least two labelled ticks first (label_log_axes).
+    """
     directory = Path(directory)
+    label_log_axes(fig)
     fig.tight_layout()
     png = directory / f"figure{number}.png"
     svg = directory / f"figure{number}.svg"

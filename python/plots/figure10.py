@@ -10,8 +10,9 @@ Reads, as `implicit reproduce --only laser_mcl --out <dir>` writes them
   laser_mcl_track_implicit.csv      update,time_s,x_m,y_m,heading_rad,error_m,particles: the
   laser_mcl_track_bootstrap.csv     first run of each proposal from a known start
 
-Left panel: the map with the reference path and both estimated paths. Right panel: the position
-error of both against the time since the first update, on a log axis (one y-range for both).
+Left panel: the map around the paths (their bounding box with a margin) with the reference path and
+both estimated paths. Right panel: the position error of both at each update against the time
+since the first update, on a log axis (one y-range for both).
 Writes <dir>/figure10.png and <dir>/figure10.svg.
 """
 import numpy as np
@@ -27,6 +28,10 @@ ERROR_FLOOR = 1e-3
 # Cells per image pixel at most: a 5 cm wall is far below a pixel of the panel, so blocks of
 # cells are drawn occupied when any of their cells is.
 MAP_PIXELS = 500
+# The least margin around the paths in the map panel [m].
+PATH_MARGIN_M = 3.0
+# Height over width of the map panel's zoom window (about the panel's own shape).
+PANEL_ASPECT = 0.85
 
 
 def map_image(cells, name):
@@ -67,10 +72,22 @@ def draw(d):
         t = tracks[p]
         a.plot(t["x_m"], t["y_m"], color=COLORS["implicit" if p == "implicit" else "standard"],
                lw=0.8, label=f"{name}, M = {int(t['particles'][0])}")
+    # The map is far larger than a short run's path, which drawn on all of it is a few pixels:
+    # zoom to the paths with a margin that keeps the walls around them in view.
+    xs = np.concatenate([ref["x_m"]] + [tracks[p]["x_m"] for p, _ in PROPOSALS])
+    ys = np.concatenate([ref["y_m"]] + [tracks[p]["y_m"] for p, _ in PROPOSALS])
+    cx, cy = (np.nanmax(xs) + np.nanmin(xs)) / 2, (np.nanmax(ys) + np.nanmin(ys)) / 2
+    hx, hy = (np.nanmax(xs) - np.nanmin(xs)) / 2, (np.nanmax(ys) - np.nanmin(ys)) / 2
+    margin = max(PATH_MARGIN_M, 0.15 * max(hx, hy))
+    hx, hy = hx + margin, hy + margin
+    # A window of about the panel's shape: a path along one corridor would leave a thin strip.
+    hx, hy = max(hx, hy / PANEL_ASPECT), max(hy, hx * PANEL_ASPECT)
+    a.set_xlim(cx - hx, cx + hx)
+    a.set_ylim(cy - hy, cy + hy)
     a.set_aspect("equal")
     a.set_xlabel("x [m]")
     a.set_ylabel("y [m]")
-    a.set_title("ACES map, reference and estimated paths (first run)")
+    a.set_title("ACES map near the path: reference and estimates (first run)")
     a.legend(fontsize=7, loc="best")
 
     a = ax[1]
@@ -79,8 +96,11 @@ def draw(d):
         t = tracks[p]
         e = np.maximum(t["error_m"], ERROR_FLOOR)
         top = max(top, float(np.nanmax(e)))
+        # Markers at the updates: the filter updates only after the robot moved, so long
+        # straight pieces are stretches without an update, not a constant error.
         a.plot(t["time_s"], e, color=COLORS["implicit" if p == "implicit" else "standard"],
-               lw=0.7, alpha=0.85, label=f"{name}, M = {int(t['particles'][0])}")
+               lw=0.7, marker="o", ms=2.5, alpha=0.85,
+               label=f"{name}, M = {int(t['particles'][0])}")
     a.set_yscale("log")
     # At least two decades with labels at 1, 2 and 5 of each, so the axis reads without counting
     # minor ticks.

@@ -23,13 +23,14 @@ def draw(d):
     g1, g2 = np.meshgrid(np.linspace(-5.5, 5.5, 400), np.linspace(-5.5, 5.5, 400))
     levels = np.concatenate([[0.5, 2, 5, 10, 20], np.arange(40, 400, 30)])
     cs = ax.contour(g1, g2, himmelblau(g1, g2), levels=levels, colors="#999999", linewidths=0.6)
-    ax.clabel(cs, cs.levels[::3], fontsize=6)
+    ax.clabel(cs, cs.levels[::3], fontsize=6, fmt="%g")
     splits = np.flatnonzero(np.diff(ids)) + 1
     groups = np.split(np.arange(len(ids)), splits)
     for i, g in enumerate(groups):
         ax.plot(runs["x1"][g], runs["x2"][g], "-", color=COLORS["implicit"], lw=0.7, alpha=0.5,
                 label="stochastic control runs" if i == 0 else None)
-        ax.plot(runs["x1"][g][-1], runs["x2"][g][-1], "o", color=COLORS["implicit"], ms=3)
+        ax.plot(runs["x1"][g][-1], runs["x2"][g][-1], "o", color=COLORS["implicit"], ms=3,
+                label="end points of the runs" if i == 0 else None)
     ax.plot(newton["x1"], newton["x2"], "s-", color=COLORS["standard"], ms=4,
             label=f"Newton (ends at f = {newton['f'][-1]:.2f}, a saddle)")
     ax.plot([-1], [-4], "k*", ms=10, label="start (-1, -4)")

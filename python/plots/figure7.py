@@ -23,6 +23,9 @@ import numpy as np
 
 from common import COLORS, DataError, figure_main, load_csv, save, subplots
 
+# The methods as the report names them (slam_summary.csv's method column holds the CLI's names).
+METHOD_NAMES = {"ekf": "EKF-SLAM", "fastslam1": "FastSLAM 1.0", "fastslam2": "FastSLAM 2.0",
+                "implicit": "implicit SLAM (A)", "implicit-rb": "implicit SLAM (B)"}
 SUMMARY = ["particles", "datasets", "error_percent_mean", "error_percent_std", "cpu_ms_per_step",
            "map_shape_m"]
 
@@ -57,7 +60,7 @@ def draw(d):
     a = ax[0]
     a.plot(path["x_true"], path["y_true"], color=COLORS["exact"], lw=1.5, label="true path")
     a.plot(path["x_hat"], path["y_hat"], color=COLORS["implicit"], lw=1.0,
-           label=f"{choice[0]} SLAM, M = {choice[1]}")
+           label=f"{METHOD_NAMES[choice[0]]}, M = {choice[1]}")
     t = kind == "true"
     a.plot(mp["x"][t], mp["y"][t], "^", color=COLORS["landmark"], ms=7, mfc="none",
            label="true landmarks")
@@ -77,7 +80,8 @@ def draw(d):
         y = [s["error_percent_mean"][i] for _, i in pts]
         color = COLORS.get(m, COLORS["implicit"] if m == "implicit" else "#2ca02c")
         se = [s["error_percent_std"][i] / max(s["datasets"][i], 1) ** 0.5 for _, i in pts]
-        b.errorbar(x, y, yerr=se, fmt="o", color=color, capsize=3, label=m)
+        b.errorbar(x, y, yerr=se, fmt="o", color=color, capsize=3,
+                   label=METHOD_NAMES.get(m, m))
         for (p, i), xx, yy in zip(pts, x, y):
             if m != "ekf":
                 b.annotate(f"{p}", (xx, yy), fontsize=7, xytext=(3, 3), textcoords="offset points")

@@ -11,7 +11,8 @@ from the mcl runs with M = 100 in configs A and B (reused, not rerun).
 
 Top row: ESS/M, position RMSE and CPU time per step against the ratio of the per-step process
 noise to the sensor noise (log axis). Bottom row: the same against the step length. Error bars
-are one standard error over the simulated logs (over the runs for the Car Park points).
+are one standard error over the simulated logs (over the runs for the Car Park points); the
+Car Park points are open squares (config A) and triangles (config B), coloured by method.
 Writes <dir>/figure8.png and <dir>/figure8.svg.
 """
 import math
@@ -20,6 +21,8 @@ import numpy as np
 
 from common import COLORS, DataError, figure_main, load_csv, load_results, save, subplots
 
+# One marker per Car Park configuration (open markers, coloured by method).
+CARPARK_MARKERS = {"A": "s", "B": "^"}
 METRICS = [("ess", "ESS / M"), ("rmse_m", "position RMSE [m]"),
            ("cpu_ms_per_step", "CPU time per step [ms]")]
 
@@ -76,21 +79,22 @@ def draw(d):
                            fmt="o-", color=COLORS[method], capsize=3, label=name)
             if sweep == "ratio":
                 for config, ratio, m in carpark_points(d):
-                    for method, marker in (("implicit", "s"), ("standard", "D")):
+                    for method, name in (("implicit", "implicit"), ("standard", "bootstrap")):
                         v = m[method]
-                        a.errorbar([ratio], [v[2 * col]], yerr=[v[2 * col + 1]], fmt=marker,
-                                   mfc="none", color=COLORS[method], capsize=3,
-                                   label=f"Car Park {config}, "
-                                         f"{'implicit' if method == 'implicit' else 'bootstrap'}")
-                        a.annotate(config, (ratio, v[2 * col]), textcoords="offset points",
-                                   xytext=(5, 5), fontsize=8)
+                        # The marker tells the configuration, the colour the method, as in the
+                        # legend: no text next to the points, which overlapped where A and B
+                        # (or the two methods) lie close.
+                        a.errorbar([ratio], [v[2 * col]], yerr=[v[2 * col + 1]],
+                                   fmt=CARPARK_MARKERS[config], mfc="none", ms=7,
+                                   color=COLORS[method], capsize=3,
+                                   label=f"Car Park {config}, {name}")
             a.set_xscale("log")
             a.set_xlabel(xlabel)
             a.set_ylabel(ylabel)
             if key == "rmse_m":
                 a.set_yscale("log")
             if col == 0:
-                a.legend(fontsize=7)
+                a.legend(fontsize=7, loc="best")
     save(fig, d, 8)
 
 
