@@ -28,7 +28,7 @@ STUDIES = (("global", "global start"), ("kidnap", "kidnapping"))
 # Errors below a millimetre (an exact zero included) are drawn at it, on the log axis.
 ERROR_FLOOR = 1e-3
 # Line styles of a panel's runs (the colour is the method's).
-RUN_STYLES = ("-", "--", "-.", ":")
+RUN_STYLES = ("-", "--", "-.", ":", (0, (6, 2, 1, 2, 1, 2)))
 
 
 def largest(d, study, method):
