@@ -135,6 +135,10 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
   options.recovery.recovery_alpha_slow = s.recovery_alpha_slow;
   options.recovery.recovery_alpha_fast = s.recovery_alpha_fast;
   options.recovery.kidnap_probability = s.kidnap_probability;
+  // Checked once, before the runs: the filter of each run checks them too, but a refusal there
+  // reads "N of N runs failed" (a RuntimeError in Python) instead of an invalid setting.
+  if (options.kld.enabled) filter::validate(options.kld);
+  if (options.recovery.enabled) filter::validate(options.recovery);
   filter::GlobalOptions g;
   g.source = source_of(s);
   g.init.cover_spacing = s.cover_spacing;

@@ -3,5 +3,8 @@ import json
 
 
 def call(fn, settings, seed, out, threads):
-    """Runs an experiment of the command-line tool and returns its JSON result as a dict."""
-    return json.loads(fn(settings, int(seed), "" if out is None else str(out), int(threads)))
+    """Runs an experiment of the command-line tool and returns its JSON result as a dict.
+
+    The settings, seed, out and threads are passed as given: the compiled side checks each
+    against the range of the tool's flag and names the keyword it refuses."""
+    return json.loads(fn(settings, seed, out, threads))

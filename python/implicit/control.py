@@ -61,8 +61,8 @@ def double_slit(samples=50, runs=500, mode="corrected", seed=1, out=None, thread
     slit's own, the same runs to rounding). Returns the dict of `implicit slit --json`
     (error_x_mean, error_u_mean in %, ...).
     """
-    return _json(_implicit._run_slit(int(samples), int(runs), mode, str(estimator), int(seed),
-                                     "" if out is None else str(out), int(threads)))
+    return _json(_implicit._run_slit(int(samples), int(runs), mode, str(estimator), seed, out,
+                                     threads))
 
 
 def arm(seed=1, out=None, threads=0, estimator="generic"):
@@ -71,11 +71,9 @@ def arm(seed=1, out=None, threads=0, estimator="generic"):
     estimator: "generic" (the library's path integral estimator on each joint, a control problem
     with partial noise) or "closed-form" (each joint's path integral in closed form, faster).
     """
-    return _json(_implicit._run_arm(str(estimator), int(seed), "" if out is None else str(out),
-                                    int(threads)))
+    return _json(_implicit._run_arm(str(estimator), seed, out, threads))
 
 
 def himmelblau(runs=70, samples=50, seed=1, out=None, threads=0):
     """The Himmelblau control problem (Table 4); the dict of `implicit himmelblau --json`."""
-    return _json(_implicit._run_himmelblau(int(runs), int(samples), int(seed),
-                                           "" if out is None else str(out), int(threads)))
+    return _json(_implicit._run_himmelblau(int(runs), int(samples), seed, out, threads))

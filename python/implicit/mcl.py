@@ -38,21 +38,20 @@ def run(method="implicit", particles=100, runs=20, seed=1, data=None, config="A"
         same numbers for the same seed. Timing keys differ from run to run.
 
     Raises:
-        implicit.InvalidArgument with the CLI's message for a bad setting.
+        implicit.InvalidArgument (a ValueError) naming the keyword, for a value the CLI refuses:
+        each number is checked against the range of its flag (`p` in [0, 10], `particles` in
+        [1, 10^7], `threads` in [0, 1024], ...; `implicit mcl --help` lists them), a wrong type
+        (a str for a number, a float for a count) likewise; the text settings (method, config,
+        ...) with the CLI's own message.
     """
     settings = dict(
-        method=method, particles=int(particles), runs=int(runs),
-        data="" if data is None else str(data), config=config,
-        p=-1.0 if p is None else float(p), q=-1.0 if q is None else float(q), map=map,
-        clutter=bool(clutter), sigma2=sigma2, truth=truth, gps_std=float(gps_std),
-        reference_particles=int(reference_particles), model=model or "",
-        control_sd=list(control_sd or []), state_sd=list(state_sd or []),
-        range_sd=float(range_sd), bearing_sd_deg=float(bearing_sd), init=init,
-        start_span=float(start_span), duration=float(duration),
-        kidnap_at=-1.0 if kidnap_at is None else float(kidnap_at), kidnap_skip=float(kidnap_skip),
-        recovery=recovery, recovery_alpha_slow=float(recovery_alpha_slow),
-        recovery_alpha_fast=float(recovery_alpha_fast),
-        kidnap_probability=float(kidnap_probability), kld=bool(kld), kld_err=float(kld_err),
-        kld_z=float(kld_z), min_particles=int(min_particles), max_particles=int(max_particles),
-        cover_spacing=float(cover_spacing), cover_headings=int(cover_headings))
+        method=method, particles=particles, runs=runs, data=data, config=config, p=p, q=q,
+        map=map, clutter=clutter, sigma2=sigma2, truth=truth, gps_std=gps_std,
+        reference_particles=reference_particles, model=model, control_sd=control_sd,
+        state_sd=state_sd, range_sd=range_sd, bearing_sd=bearing_sd, init=init,
+        start_span=start_span, duration=duration, kidnap_at=kidnap_at, kidnap_skip=kidnap_skip,
+        recovery=recovery, recovery_alpha_slow=recovery_alpha_slow,
+        recovery_alpha_fast=recovery_alpha_fast, kidnap_probability=kidnap_probability, kld=kld,
+        kld_err=kld_err, kld_z=kld_z, min_particles=min_particles, max_particles=max_particles,
+        cover_spacing=cover_spacing, cover_headings=cover_headings)
     return _runs.call(_implicit._run_mcl, settings, seed, out, threads)

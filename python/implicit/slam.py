@@ -27,12 +27,18 @@ def run(method="implicit", particles=100, datasets=50, seed=1, data=None, associ
     Returns:
         dict with the keys of `implicit slam --json` (error_percent_mean, map_shape_m,
         rmse_pose_m, ess_mean, ...), the same numbers for the same seed.
+
+    Raises:
+        implicit.InvalidArgument (a ValueError) naming the keyword, for a value the CLI refuses:
+        each number is checked against the range of its flag (`particles` in [1, 10^6],
+        `bearing_sd` in [0, 90], `threads` in [0, 1024], ...; `implicit slam --help` lists
+        them), a wrong type likewise; the text settings (method, association, ...) with the
+        CLI's own message.
     """
     settings = dict(
-        method=method, particles=int(particles), datasets=int(datasets),
-        data="" if data is None else str(data), association=association, truth=truth,
-        laser_every=int(laser_every), control_noise=float(control_noise),
-        min_range=float(min_range), range_sd=float(range_sd), bearing_sd_deg=float(bearing_sd),
-        gate_chi2=float(gate_chi2), new_landmark_density=float(new_landmark_density),
-        model=model or "", control_sd=list(control_sd or []), state_sd=list(state_sd or []))
+        method=method, particles=particles, datasets=datasets, data=data,
+        association=association, truth=truth, laser_every=laser_every,
+        control_noise=control_noise, min_range=min_range, range_sd=range_sd,
+        bearing_sd=bearing_sd, gate_chi2=gate_chi2, new_landmark_density=new_landmark_density,
+        model=model, control_sd=control_sd, state_sd=state_sd)
     return _runs.call(_implicit._run_slam, settings, seed, out, threads)

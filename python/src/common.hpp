@@ -1,10 +1,15 @@
 #pragma once
 // Shared helpers of the Python extension: numpy arrays that own C++ buffers without copying
-// them, and the argument checks that turn bad shapes into InvalidArgument (ValueError).
+// them, and the argument checks that turn bad shapes, types and values into InvalidArgument
+// (ValueError) naming the argument. pybind11's own conversions would raise a TypeError listing
+// the whole signature, or a RuntimeError ("Unable to cast"), instead of the argument at fault.
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cstdint>
+#include <filesystem>
+#include <initializer_list>
 #include <string>
 #include <utility>
 #include <vector>
@@ -44,5 +49,24 @@ Array require_shape(const py::handle& object, const std::string& name,
                     std::vector<py::ssize_t> shape, bool finite = true);
 
 std::string shape_text(const py::array& a);
+
+/// The name of a Python object's type, for messages ("got str").
+std::string type_name(const py::handle& o);
+
+/// A Python number as a double in [lo, hi] (lo excluded when lo_open); NaN and infinities are
+/// refused. The message names `name` and the bounds.
+double number_arg(const py::handle& o, const std::string& name, double lo, double hi,
+                  bool lo_open = false);
+/// A Python integer (not a float: 2.5 particles is a mistake, not 2) in [lo, hi].
+long long int_arg(const py::handle& o, const std::string& name, long long lo, long long hi);
+/// A seed: an integer in [0, 2^64 - 1], the range of the tool's --seed.
+std::uint64_t seed_arg(const py::handle& o, const std::string& name);
+/// True or False (not any object with a truth value).
+bool bool_arg(const py::handle& o, const std::string& name);
+/// A str that is one of `allowed`.
+std::string choice_arg(const py::handle& o, const std::string& name,
+                       std::initializer_list<const char*> allowed);
+/// A str or os.PathLike naming a file.
+std::filesystem::path path_arg(const py::handle& o, const std::string& name);
 
 }  // namespace implicit::python

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <string>
 
 #include "common.hpp"
 #include "implicit/core/share_dir.hpp"
@@ -12,6 +14,7 @@
 #include "implicit/robot/carpark.hpp"
 #include "implicit/robot/simulate.hpp"
 #include "robot.hpp"
+#include "vehicle.hpp"
 
 namespace implicit::python {
 namespace {
@@ -136,7 +139,8 @@ void bind_problem(py::module_& m) {
 A log prepared for filtering, one entry per motion step (what ``implicit mcl`` runs).
 
 Attributes: controls (N, 2), dt (N,) step lengths [s], detections (list of N arrays (k, 3) of
-[landmark index, range m, bearing rad]; k = 0 at prediction-only steps), truth (N, 2) [m] and
+[landmark id, range m, bearing rad], the id being the row of `landmarks` (the log's own ids are
+renumbered 0 to K-1); k = 0 at prediction-only steps), truth (N, 2) [m] and
 truth_heading (N,) [rad] interpolated at the steps (NaN where unknown), landmarks (K, 2),
 initial_mean (3,), initial_covariance (3, 3).
 
@@ -246,13 +250,20 @@ void init_data(py::module_& m) {
       "steps",
       [](const robot::RobotLog& log, const py::object& model) {
         require_model(model, "steps");
-        const double dt = py::isinstance<robot::UnicycleModel>(model)
-                              ? model.cast<const robot::UnicycleModel&>().dt()
-                              : model.cast<const robot::UteModel&>().dt();
+        const bool unicycle = py::isinstance<robot::UnicycleModel>(model);
+        // The tool's check (apps/vehicle.cpp, `implicit mcl --model`): a log drives one robot,
+        // and the other model would read its controls as something else.
+        app::resolve_model("steps", unicycle ? "unicycle" : "ute",
+                           log.vehicle ? std::optional(log.vehicle->model) : std::nullopt,
+                           log.source.empty() ? std::string("(in memory)") : log.source);
+        const double dt = unicycle ? model.cast<const robot::UnicycleModel&>().dt()
+                                   : model.cast<const robot::UteModel&>().dt();
         return filter::make_problem(log, dt);
       },
       py::arg("log"), py::arg("model"),
-      "The log as filter steps at the model's nominal dt (scans attached to the nearest step).");
+      "The log as filter steps at the model's nominal dt (scans attached to the nearest step). "
+      "A log that declares a vehicle (Log.vehicle) takes that model only, as `implicit mcl "
+      "--model` does: another one raises ValueError.");
   m.def(
       "simulate",
       [](const py::object& model, const robot::RangeBearingSensor& sensor, int steps, int landmarks,

@@ -4,6 +4,9 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <memory>
 
 #include "common.hpp"
@@ -72,7 +75,7 @@ std::unique_ptr<AnyFilter> make_filter(const Motion& m, const robot::RangeBearin
 struct PyFilter {
   std::unique_ptr<AnyFilter> f;
   std::vector<LabelledMeasurement> z;
-  std::size_t landmarks = 0;
+  robot::LandmarkMap map;  ///< the ids of the detections' column 0
   bool initialized = false;
 };
 
@@ -91,16 +94,70 @@ py::dict summary(const StepSummary& s) {
   return d;
 }
 
+/// The largest landmark id: ids are C++ ints (robot::LandmarkMap, slam::Observation).
+constexpr double kMaxLandmarkId = std::numeric_limits<int>::max();
+
+/// The detections (k, 3) [landmark id or -1, range, bearing]: column 0 is refused unless it is
+/// -1 (unlabelled) or an integer id in [0, 2^31 - 1]; a larger one would be cast to int out of
+/// range (undefined behaviour), and read as unlabelled on common hardware.
 void read_detections(const py::object& detections, std::vector<LabelledMeasurement>& z) {
   z.clear();
   if (detections.is_none()) return;
   const Array a = require_shape(detections, "detections", {-1, 3});
   for (py::ssize_t k = 0; k < a.shape(0); ++k) {
     const double id = a.at(k, 0);
-    require(id == std::floor(id) && id >= -1,
-            "detections: expected a landmark index (integer >= -1) in column 0, got {} in row {}",
-            id, k);
+    require(id == std::floor(id) && (id == -1 || (id >= 0 && id <= kMaxLandmarkId)),
+            "detections: row {}: expected a landmark id in [0, {}] or -1 (unlabelled) in column "
+            "0, got {}",
+            k, kMaxLandmarkId, id);
     z.push_back({Measurement(a.at(k, 1), a.at(k, 2)), static_cast<int>(id)});
+  }
+}
+
+/// The map of a ParticleFilter: positions (K, 2) and, when given, their ids (K,) (else 0..K-1,
+/// the rows).
+robot::LandmarkMap filter_landmark_map(const py::object& landmarks, const py::object& ids) {
+  if (ids.is_none()) return landmark_map(landmarks);
+  const Array pos = require_shape(landmarks, "landmarks", {-1, 2});
+  const Array id = require_shape(ids, "landmark_ids", {pos.shape(0)});
+  robot::LandmarkMap map;
+  for (py::ssize_t k = 0; k < pos.shape(0); ++k) {
+    const double v = id.data()[k];
+    require(v == std::floor(v) && v >= 0 && v <= kMaxLandmarkId,
+            "landmark_ids: expected integer ids in [0, {}], got {} at index {}", kMaxLandmarkId, v,
+            k);
+    require(map.index_of(static_cast<int>(v)) < 0,
+            "landmark_ids: expected unique ids, got {} at indices {} and {}", v,
+            map.index_of(static_cast<int>(v)), k);
+    map.add(static_cast<int>(v), robot::Landmark(pos.at(k, 0), pos.at(k, 1)));
+  }
+  return map;
+}
+
+/// The map's ids for a message: "0 to K-1" when they are the rows, else the first few.
+std::string filter_map_ids_text(const robot::LandmarkMap& map) {
+  bool rows = true;
+  for (std::size_t k = 0; rows && k < map.size(); ++k) rows = map.id(k) == static_cast<int>(k);
+  if (map.empty()) return "the map is empty";
+  if (rows) return fmt::format("its ids are 0 to {}, the rows of `landmarks`", map.size() - 1);
+  std::string ids;
+  for (std::size_t k = 0; k < std::min<std::size_t>(map.size(), 8); ++k)
+    ids += fmt::format("{}{}", k ? ", " : "", map.id(k));
+  return fmt::format("its ids are those of `landmark_ids`: {}{}", ids,
+                     map.size() > 8 ? ", ..." : "");
+}
+
+/// Labels of ParticleFilter detections, landmark ids, turned into the filter's map indices; an
+/// id not in the map is refused (it would name another landmark, or none).
+void ids_to_map_indices(const robot::LandmarkMap& map, std::vector<LabelledMeasurement>& z) {
+  for (std::size_t k = 0; k < z.size(); ++k) {
+    if (z[k].landmark < 0) continue;
+    const int index = map.index_of(z[k].landmark);
+    require(index >= 0,
+            "detections: row {}: landmark id {} is not in the map ({}): column 0 takes landmark "
+            "ids, or -1 (unlabelled)",
+            k, z[k].landmark, filter_map_ids_text(map));
+    z[k].landmark = index;
   }
 }
 
@@ -108,12 +165,13 @@ constexpr const char* kParticleFilterDoc = R"doc(
 Monte Carlo localization with a known landmark map (spec §3.8), stepped from Python.
 
 ParticleFilter(model, sensor, landmarks, proposal="implicit", particles=100, seed=1,
-               map="linear", resample_threshold=0.5, resampling="systematic", clutter=True)
+               map="linear", resample_threshold=0.5, resampling="systematic", clutter=True,
+               landmark_ids=None)
 
 Args:
     model: implicit.models.Ute or implicit.models.Unicycle.
     sensor: implicit.models.RangeBearing.
-    landmarks: (K, 2) landmark positions [m]; detections name them by row index.
+    landmarks: (K, 2) landmark positions [m].
     proposal: "implicit" (implicit sampling per particle) or "bootstrap" (the motion model).
     particles: M.
     seed: particle j at step n draws from the stream (seed, n, j): results do not depend on
@@ -122,10 +180,15 @@ Args:
     resample_threshold: resample when ESS < threshold * M.
     resampling: "multinomial", "systematic", "stratified" or "residual".
     clutter: detections outside the gate contribute the clutter density.
+    landmark_ids: (K,) the landmarks' ids (integers >= 0, unique), e.g. log.landmark_ids or
+        the ids of slam.Filter.map(); None: 0 to K-1, the rows of landmarks.
 
 Use: initialize(mean (3,), covariance (3, 3)), then step(control (2,), dt [s], detections) per
-motion step, with detections an (k, 3) array of [landmark index, range m, bearing rad] (None or
-k = 0: predict only); dt = 0 keeps the previous step length (initially the model's dt).
+motion step, with detections an (k, 3) array of [landmark id or -1, range m, bearing rad] (None
+or k = 0: predict only); dt = 0 keeps the previous step length (initially the model's dt).
+Column 0 is a landmark id, as in slam.Filter and Log.scans: with landmark_ids=None the id is
+the row of landmarks (as in Steps.detections); an id not in the map raises ValueError, -1 is an
+unlabelled detection (associated by the filter).
 
 particles (M, 3) and weights (M,) are read-only views of the filter's buffers, valid until the
 next step (copy them to keep them). mean() and covariance() are the weighted pose mean (heading:
@@ -147,16 +210,17 @@ void bind_particle_filter(py::module_& m) {
       .def(py::init([](const py::object& model, const robot::RangeBearingSensor& sensor,
                        const py::object& landmarks, const std::string& proposal,
                        std::size_t particles, std::uint64_t seed, const std::string& map,
-                       double resample_threshold, const std::string& resampling, bool clutter) {
+                       double resample_threshold, const std::string& resampling, bool clutter,
+                       const py::object& landmark_ids) {
              filter::FilterOptions o;
              o.particles = particles;
              o.seed = seed;
              o.resample_threshold = resample_threshold;
              o.resampling = parse_resampling_scheme(resampling);
              o.association.clutter = clutter;
-             robot::LandmarkMap lm = landmark_map(landmarks);
+             robot::LandmarkMap lm = filter_landmark_map(landmarks, landmark_ids);
              PyFilter p;
-             p.landmarks = lm.size();
+             p.map = lm;
              if (py::isinstance<robot::UnicycleModel>(model))
                p.f = make_filter(model.cast<const robot::UnicycleModel&>(), sensor, std::move(lm),
                                  proposal, map, o);
@@ -172,7 +236,8 @@ void bind_particle_filter(py::module_& m) {
            py::arg("model"), py::arg("sensor"), py::arg("landmarks"),
            py::arg("proposal") = "implicit", py::arg("particles") = 100, py::arg("seed") = 1,
            py::arg("map") = "linear", py::arg("resample_threshold") = 0.5,
-           py::arg("resampling") = "systematic", py::arg("clutter") = true)
+           py::arg("resampling") = "systematic", py::arg("clutter") = true,
+           py::arg("landmark_ids") = py::none())
       .def(
           "initialize",
           [](PyFilter& p, const py::object& mean, const py::object& cov) {
@@ -192,10 +257,7 @@ void bind_particle_filter(py::module_& m) {
             require(p.initialized, "ParticleFilter.step: call initialize(mean, covariance) first");
             const Array u = require_shape(control, "control", {2});
             read_detections(detections, p.z);
-            for (const auto& z : p.z)
-              require(z.landmark < static_cast<int>(p.landmarks),
-                      "detections: expected landmark indices below {}, got {}", p.landmarks,
-                      z.landmark);
+            ids_to_map_indices(p.map, p.z);
             const Control c(u.data()[0], u.data()[1]);
             {
               py::gil_scoped_release unlocked;
@@ -205,7 +267,8 @@ void bind_particle_filter(py::module_& m) {
           },
           py::arg("control"), py::arg("dt") = 0.0, py::arg("detections") = py::none(),
           "One motion step with control (2,) over dt [s] (0: the previous length), then the "
-          "update with detections (k, 3) [landmark index, range m, bearing rad] (None: predict).")
+          "update with detections (k, 3) [landmark id or -1, range m, bearing rad] (None: "
+          "predict); the ids are those of the map (landmark_ids, else the rows of landmarks).")
       .def_property_readonly("particles",
                              [](py::object self) {
                                const auto s = self.cast<PyFilter&>().f->particles();
@@ -254,7 +317,9 @@ Args:
     association: "known" (column 0 of the detections identifies the landmark) or "ml".
     initial_pose: (3,) the known start pose.
 
-step(control (2,), dt [s], detections (k, 3) [landmark, range m, bearing rad] or None);
+step(control (2,), dt [s], detections (k, 3) [landmark id or -1, range m, bearing rad] or
+None): column 0 is the landmark's id (an integer in [0, 2^31 - 1]), as in ParticleFilter
+(association "ml": -1 marks an unlabelled row);
 mean() (3,), covariance() (3, 3); map() returns (positions (K, 2), ids (K,)); ess the mean
 ESS / M over the weighted steps so far.)doc";
 

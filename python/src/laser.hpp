@@ -27,20 +27,8 @@ namespace implicit::python::laser {
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr long long kMaxInt = std::numeric_limits<long long>::max();
 
-/// The name of a Python object's type, for messages ("got str").
-std::string type_name(const py::handle& o);
+// type_name, number_arg, int_arg, seed_arg, bool_arg, choice_arg and path_arg: common.hpp.
 
-/// A Python number as a double in [lo, hi] (lo excluded when lo_open); NaN and infinities are
-/// refused. The message names `name` and the bounds.
-double number_arg(const py::handle& o, const std::string& name, double lo, double hi,
-                  bool lo_open = false);
-/// A Python integer (not a float) in [lo, hi].
-long long int_arg(const py::handle& o, const std::string& name, long long lo, long long hi);
-/// A str that is one of `allowed`.
-std::string choice_arg(const py::handle& o, const std::string& name,
-                       std::initializer_list<const char*> allowed);
-/// A str or os.PathLike naming a file.
-std::filesystem::path path_arg(const py::handle& o, const std::string& name);
 /// An (n,) array of finite values.
 Vec<3> vec3_arg(const py::handle& o, const std::string& name);
 /// (x forward [m], y left [m], yaw [rad]) of the laser on the robot.

@@ -10,29 +10,7 @@
 
 namespace implicit::python::laser {
 
-std::string type_name(const py::handle& o) {
-  return py::str(py::type::handle_of(o).attr("__name__"));
-}
-
 namespace {
-
-std::string bounds_text(double lo, double hi, bool lo_open) {
-  if (lo == -kInf && hi == kInf) return "a finite number";
-  if (hi == kInf) return fmt::format("a finite number {} {}", lo_open ? ">" : ">=", lo);
-  if (lo == -kInf) return fmt::format("a number <= {}", hi);
-  return fmt::format("a number in {}{}, {}]", lo_open ? "(" : "[", lo, hi);
-}
-
-std::string choices_text(std::initializer_list<const char*> allowed) {
-  std::string s;
-  std::size_t k = 0;
-  for (const char* a : allowed) {
-    s += k == 0 ? "" : (k + 1 == allowed.size() ? " or " : ", ");
-    s += fmt::format("'{}'", a);
-    ++k;
-  }
-  return s;
-}
 
 /// Checks a scan's fields; prefix names where the scan came from ("" or "scans[3].").
 void check_scan(const robot::LaserScan& s, const std::string& prefix) {
@@ -54,70 +32,6 @@ void check_scan(const robot::LaserScan& s, const std::string& prefix) {
 }
 
 }  // namespace
-
-double number_arg(const py::handle& o, const std::string& name, double lo, double hi,
-                  bool lo_open) {
-  double v = 0.0;
-  // Strings are refused (pybind11 would not parse them either); numpy scalars are numbers.
-  bool ok = !py::isinstance<py::str>(o) && !o.is_none();
-  if (ok) {
-    try {
-      v = o.cast<double>();
-    } catch (const py::cast_error&) {
-      ok = false;
-    } catch (const py::error_already_set&) {
-      ok = false;
-    }
-  }
-  require(ok, "{}: expected {}, got {}", name, bounds_text(lo, hi, lo_open), type_name(o));
-  require(std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi, "{}: expected {}, got {}",
-          name, bounds_text(lo, hi, lo_open), v);
-  return v;
-}
-
-long long int_arg(const py::handle& o, const std::string& name, long long lo, long long hi) {
-  const std::string want = hi == std::numeric_limits<long long>::max()
-                               ? fmt::format("an integer >= {}", lo)
-                               : fmt::format("an integer in [{}, {}]", lo, hi);
-  long long v = 0;
-  bool ok = !py::isinstance<py::str>(o) && !o.is_none();
-  if (ok) {
-    try {
-      v = o.cast<long long>();  // refuses floats: 2.5 particles is a mistake, not 2
-    } catch (const py::cast_error&) {
-      ok = false;
-    } catch (const py::error_already_set&) {
-      ok = false;
-    }
-  }
-  require(ok, "{}: expected {}, got {}", name, want, type_name(o));
-  require(v >= lo && v <= hi, "{}: expected {}, got {}", name, want, v);
-  return v;
-}
-
-std::string choice_arg(const py::handle& o, const std::string& name,
-                       std::initializer_list<const char*> allowed) {
-  require(py::isinstance<py::str>(o), "{}: expected {}, got {}", name, choices_text(allowed),
-          type_name(o));
-  const std::string s = o.cast<std::string>();
-  for (const char* a : allowed)
-    if (s == a) return s;
-  throw InvalidArgument(
-      fmt::format("{}: expected {}, got '{}'", name, choices_text(allowed), printable(s)));
-}
-
-std::filesystem::path path_arg(const py::handle& o, const std::string& name) {
-  py::object p;
-  try {
-    p = py::module_::import("os").attr("fspath")(o);
-  } catch (const py::error_already_set&) {
-  }
-  require(p && py::isinstance<py::str>(p), "{}: expected a path (str or os.PathLike), got {}", name,
-          type_name(o));
-  const std::string s = p.cast<std::string>();
-  require(!s.empty(), "{}: expected a file name, got an empty string", name);
-  return s;
-}
 
 Vec<3> vec3_arg(const py::handle& o, const std::string& name) {
   const Array a = require_shape(o, name, {3});

@@ -300,11 +300,6 @@ struct RunArgs {
   }
 };
 
-bool bool_arg(const py::handle& o, const std::string& name) {
-  require(py::isinstance<py::bool_>(o), "{}: expected True or False, got {}", name, type_name(o));
-  return o.cast<bool>();
-}
-
 /// The observation model of a run, mapped as the tool maps its flags (cmd_mcl_laser.cpp): the
 /// shared parameters (nav2's names) mean the same in both models.
 void read_laser_model(const RunArgs& arg, bool implicit, experiments::LaserMclSettings& s) {

@@ -1,0 +1,39 @@
+#pragma once
+// The settings of the one-call runners implicit.mcl.run and implicit.slam.run, converted from the
+// Python keywords into the tool's settings structs and checked against the ranges of the tool's
+// flags (apps/cmd_mcl.cpp, apps/cmd_slam.cpp, apps/context.cpp): a value the command line
+// refuses is refused here too, as InvalidArgument (ValueError) naming the keyword and the range,
+// before a run starts.
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "common.hpp"
+#include "experiments.hpp"
+
+namespace implicit::python {
+
+/// One numeric setting: the Python keyword, the tool's flag and the range of its CLI11 check
+/// (in_range(lo, hi)); `count` > 0 for a list of that many values (each in the range).
+struct RunSettingRange {
+  const char* key;
+  const char* flag;
+  double lo;
+  double hi;
+  bool integer;
+  int count = 0;
+};
+
+/// The ranges of implicit.mcl.run ("mcl") or implicit.slam.run ("slam"), including the common
+/// `threads`; tests compare them with the tool's --help.
+std::span<const RunSettingRange> run_setting_ranges(const std::string& command);
+
+app::MclSettings mcl_settings(const py::dict& kw);
+app::SlamSettings slam_settings(const py::dict& kw);
+
+/// The common settings of every runner: seed (--seed: [0, 2^64 - 1]), out (None: no files) and
+/// threads (--threads: [0, 1024]).
+app::RunContext run_context(const py::handle& seed, const py::handle& out,
+                            const py::handle& threads);
+
+}  // namespace implicit::python
