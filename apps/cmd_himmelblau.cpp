@@ -5,6 +5,7 @@
 #include "context.hpp"
 #include "experiments.hpp"
 #include "implicit/core/parallel.hpp"
+#include "plural.hpp"
 #include "registry.hpp"
 
 namespace implicit::app {
@@ -41,18 +42,19 @@ void setup_himmelblau(CLI::App& sub) {
       return;
     }
     fmt::print(
-        "Himmelblau from (-1, -4), {} runs, M = {}:\n"
+        "Himmelblau from (-1, -4), {}, M = {}:\n"
         "  Newton stops at f = {:.4f} (a saddle)\n"
         "  runs ending with f < 10: {} of {}; mean final f {:.3f}; mean cost {:.3f} ± {:.3f}\n"
         "  mean end point ({:.4f}, {:.4f})\n"
         "  closed form: cost {:.4f}, f(x_19) {:.3f}; ours: f(x_19) {:.3f} ± {:.3f}, cost with the "
         "last noise step averaged {:.5f} ± {:.5f}\n"
         "  {:.2f} s\n",
-        r["runs"].get<int>(), r["samples"].get<int>(), r["newton_final_f"].get<double>(),
-        r["runs_below_10"].get<int>(), r["runs"].get<int>(), r["mean_final_f"].get<double>(),
-        r["mean_cost"].get<double>(), r["mean_cost_se"].get<double>(),
-        r["end_point"][0].get<double>(), r["end_point"][1].get<double>(),
-        r["expected"]["cost"].get<double>(), r["expected"]["f_before_last_step"].get<double>(),
+        counted(r["runs"].get<int>(), "run", "runs"), r["samples"].get<int>(),
+        r["newton_final_f"].get<double>(), r["runs_below_10"].get<int>(), r["runs"].get<int>(),
+        r["mean_final_f"].get<double>(), r["mean_cost"].get<double>(),
+        r["mean_cost_se"].get<double>(), r["end_point"][0].get<double>(),
+        r["end_point"][1].get<double>(), r["expected"]["cost"].get<double>(),
+        r["expected"]["f_before_last_step"].get<double>(),
         r["mean_f_before_last_step"].get<double>(), r["mean_f_before_last_step_se"].get<double>(),
         r["mean_cost_last_step_adjusted"].get<double>(),
         r["mean_cost_last_step_adjusted_se"].get<double>(), r["seconds"].get<double>());

@@ -1,5 +1,6 @@
 // `implicit mcl`: Monte Carlo localization on the Car Park data (paper §4.1, Table 5, Figure 6).
 #include <cmath>
+#include <filesystem>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
@@ -8,6 +9,7 @@
 #include "context.hpp"
 #include "experiments.hpp"
 #include "implicit/core/parallel.hpp"
+#include "plural.hpp"
 #include "registry.hpp"
 
 namespace implicit::app {
@@ -192,22 +194,32 @@ void setup_mcl(CLI::App& sub) {
       const bool kidnap = r.contains("kidnap_recovery_rate");
       const double rate = r[kidnap ? "kidnap_recovery_rate" : "global_success_rate"].get<double>();
       fmt::print(
-          "MCL {} {} M = {}, {} runs: {} rate {}, median time {:.1f} s, particles {:.0f} "
+          "MCL {} {} M = {}, {}: {} rate {}, median time {:.1f} s, particles {:.0f} "
           "(peak {:.0f}), {:.4f} ms per step\n",
           kidnap ? "kidnapping" : "global start", r["method"].get<std::string>(),
-          r["particles"].get<int>(), r["runs"].get<int>(), kidnap ? "recovery" : "success",
+          r["particles"].get<int>(), counted(r["runs"].get<int>(), "run", "runs"),
+          kidnap ? "recovery" : "success",
           std::isfinite(rate) ? fmt::format("{:.2f}", rate) : "n/a (nothing was tested)",
           r[kidnap ? "recovery_time_s_median" : "time_to_converge_s_median"].get<double>(),
           r["particles_mean"].get<double>(), r["particles_peak"].get<double>(),
           r["cpu_ms_per_step"].get<double>());
       return;
     }
+    // Configs A and B are the Car Park's two noise settings of the Ute; another log says which
+    // log and model it ran with (a unicycle has no config).
+    const std::string& data = cmd->settings.data_dir;
+    const std::string model = r["model"].get<std::string>();
+    const std::string setting =
+        data.empty() || std::filesystem::is_directory(data)
+            ? fmt::format("config {}", r["config"].get<std::string>())
+            : fmt::format("log {}, {} model{}", data, model,
+                          model == "ute" ? ", config " + r["config"].get<std::string>() : "");
     fmt::print(
-        "MCL {} M = {}, config {}, {} runs:\n"
+        "MCL {} M = {}, {}, {}:\n"
         "  err% = {:.2f} ± {:.2f} (median {:.2f}), RMSE {:.3f} m, heading RMSE {:.4f} rad\n"
         "  lost runs {}, ESS/M {:.2f}, {:.4f} ms per step, {:.1f} s\n",
-        r["method"].get<std::string>(), r["particles"].get<int>(), r["config"].get<std::string>(),
-        r["runs"].get<int>(), r["error_percent_mean"].get<double>(),
+        r["method"].get<std::string>(), r["particles"].get<int>(), setting,
+        counted(r["runs"].get<int>(), "run", "runs"), r["error_percent_mean"].get<double>(),
         r["error_percent_std"].get<double>(), r["error_percent_median"].get<double>(),
         r["rmse_m"].get<double>(), r["heading_rmse_rad"].get<double>(), r["lost_runs"].get<int>(),
         r["ess_mean"].get<double>(), r["cpu_ms_per_step"].get<double>(),

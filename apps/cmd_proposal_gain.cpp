@@ -7,6 +7,7 @@
 #include "context.hpp"
 #include "experiments.hpp"
 #include "implicit/core/parallel.hpp"
+#include "plural.hpp"
 #include "registry.hpp"
 
 namespace implicit::app {
@@ -18,8 +19,9 @@ struct ProposalGainCommand {
 };
 
 void print_text(const nlohmann::json& r) {
-  fmt::print("implicit vs bootstrap MCL, M = {}, {} simulated logs of {} s per point\n",
-             r["particles"].get<int>(), r["runs"].get<int>(), r["duration_s"].get<double>());
+  fmt::print("implicit vs bootstrap MCL, M = {}, {} of {} s per point\n", r["particles"].get<int>(),
+             counted(r["runs"].get<int>(), "simulated log", "simulated logs"),
+             r["duration_s"].get<double>());
   fmt::print("{:<6} {:>6} {:>7} {:>15} {:>15} {:>15} {:>15} {:>9} {:>9}\n", "sweep", "dt", "ratio",
              "ESS/M impl", "ESS/M boot", "RMSE impl [m]", "RMSE boot [m]", "cpu impl", "cpu boot");
   for (const auto& p : r["points"]) {

@@ -342,14 +342,21 @@ int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt) {
     fmt::print("{}\n", results.dump(2));
   } else if (!ctx.quiet) {
     fmt::print("Report: {} and {}\n", (dir / "report.html").string(), (dir / "report.md").string());
+    // One table, its columns as wide as their longest cell (global_localization is 19
+    // characters); the figures in their numbers' order (the JSON object sorts figure10 first).
+    std::vector<std::vector<std::string>> rows;
     for (const auto& name : kExperiments) {
       const auto& e = results["experiments"][name];
       if (!e.is_object()) continue;
-      fmt::print("  {:<11} {:<8} {:>7.1f} s\n", name, e["status"].get<std::string>(),
-                 e["seconds"].get<double>());
+      rows.push_back({name, e["status"].get<std::string>(),
+                      fmt::format("{:.1f} s", e["seconds"].get<double>())});
     }
-    for (const auto& [name, f] : results["figures"].items())
-      fmt::print("  {:<11} {}\n", name, f["status"].get<std::string>());
+    for (const auto& f : kFigures) {
+      const std::string key = fmt::format("figure{}", f.number);
+      if (results["figures"].contains(key))
+        rows.push_back({key, results["figures"][key]["status"].get<std::string>()});
+    }
+    fmt::print("{}", report::aligned_columns(rows, {false, false, true}));
   }
   return all_ok ? 0 : 3;
 }

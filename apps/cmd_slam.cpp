@@ -7,6 +7,7 @@
 #include "context.hpp"
 #include "experiments.hpp"
 #include "implicit/core/parallel.hpp"
+#include "plural.hpp"
 #include "registry.hpp"
 
 namespace implicit::app {
@@ -121,11 +122,12 @@ void setup_slam(CLI::App& sub) {
       return;
     }
     fmt::print(
-        "SLAM {}, M = {}, {} data sets ({} association):\n"
+        "SLAM {}, M = {}, {} ({} association):\n"
         "  err% = {} ± {} (aligned {}), pose RMSE {}\n"
         "  map RMSE {}, map shape {}, {:.1f} landmarks\n"
         "  {:.3f} ms CPU per step, peak memory {:.1f} MB, {:.1f} s\n",
-        r["method"].get<std::string>(), r["particles"].get<int>(), r["datasets"].get<int>(),
+        r["method"].get<std::string>(), r["particles"].get<int>(),
+        counted(r["datasets"].get<int>(), "data set", "data sets"),
         r["association"].get<std::string>(), metric_text(r["error_percent_mean"], 2),
         metric_text(r["error_percent_std"], 2), metric_text(r["error_aligned_percent_mean"], 2),
         metric_text(r["rmse_pose_m"], 3, " m"), metric_text(r["rmse_map_m"], 3, " m"),

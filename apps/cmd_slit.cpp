@@ -5,6 +5,7 @@
 #include "context.hpp"
 #include "experiments.hpp"
 #include "implicit/core/parallel.hpp"
+#include "plural.hpp"
 #include "registry.hpp"
 
 namespace implicit::app {
@@ -59,19 +60,19 @@ void setup_slit(CLI::App& sub) {
       return;
     }
     fmt::print(
-        "double slit, mode {}, M = {}, {} runs:\n"
+        "double slit, mode {}, M = {}, {}:\n"
         "  e_x = {:.2f} ± {:.2f} % (median {:.2f})\n"
         "  e_u = {:.2f} ± {:.2f} % (median {:.2f})\n"
         "  crash fraction {:.3f} (exact control {:.3f})\n"
         "  plain Monte Carlo: {} of {} walks pass the wall\n"
         "  {:.1f} s\n",
-        r["mode"].get<std::string>(), r["samples"].get<int>(), r["runs"].get<int>(),
-        r["error_x_mean"].get<double>(), r["error_x_std"].get<double>(),
-        r["error_x_median"].get<double>(), r["error_u_mean"].get<double>(),
-        r["error_u_std"].get<double>(), r["error_u_median"].get<double>(),
-        r["crash_fraction"].get<double>(), r["exact_crash_fraction"].get<double>(),
-        r["naive_mc_passed"].get<int>(), r["naive_mc_samples"].get<int>(),
-        r["seconds"].get<double>());
+        r["mode"].get<std::string>(), r["samples"].get<int>(),
+        counted(r["runs"].get<int>(), "run", "runs"), r["error_x_mean"].get<double>(),
+        r["error_x_std"].get<double>(), r["error_x_median"].get<double>(),
+        r["error_u_mean"].get<double>(), r["error_u_std"].get<double>(),
+        r["error_u_median"].get<double>(), r["crash_fraction"].get<double>(),
+        r["exact_crash_fraction"].get<double>(), r["naive_mc_passed"].get<int>(),
+        r["naive_mc_samples"].get<int>(), r["seconds"].get<double>());
     check();
   });
 }

@@ -31,25 +31,28 @@ Progress::Progress(std::string label, std::size_t total, bool enabled, Style sty
 Progress::~Progress() { finish(); }
 
 void Progress::tick(std::size_t n) {
-  const std::size_t done = done_.fetch_add(n) + n;
-  if (enabled_) draw(done, false);
+  done_.fetch_add(n);
+  if (enabled_) draw(false);
 }
 
 void Progress::tick(std::size_t n, const std::string& note) {
-  const std::size_t done = done_.fetch_add(n) + n;
-  if (enabled_) draw(done, false, note);
+  done_.fetch_add(n);
+  if (enabled_) draw(false, note);
 }
 
 void Progress::finish() {
   if (!enabled_ || finished_) return;
-  draw(done_.load(), true);
+  draw(true);
   std::lock_guard lock(mutex_);
   finished_ = true;
 }
 
-void Progress::draw(std::size_t done, bool final, const std::string& note) {
+void Progress::draw(bool final, const std::string& note) {
   std::lock_guard lock(mutex_);
   if (finished_) return;
+  // The count is read under the lock, not passed from tick(): workers that finish together
+  // would otherwise print in the order they got the lock, a later line with a smaller count.
+  const std::size_t done = done_.load();
   const auto now = std::chrono::steady_clock::now();
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const double fraction = total_ ? std::min(1.0, static_cast<double>(done) / total_) : 1.0;

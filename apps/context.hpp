@@ -39,7 +39,8 @@ class Progress {
   void finish();
 
  private:
-  void draw(std::size_t done, bool final, const std::string& note = {});
+  /// Prints the count at the time it holds the lock, so printed counts never decrease.
+  void draw(bool final, const std::string& note = {});
   std::string label_;
   std::size_t total_;
   bool enabled_;

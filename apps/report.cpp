@@ -109,6 +109,33 @@ std::string slug(const std::string& s) {
 
 }  // namespace
 
+std::size_t text_width(const std::string& s) {
+  // A code point is one byte that is not a UTF-8 continuation byte (10xxxxxx).
+  return static_cast<std::size_t>(std::count_if(
+      s.begin(), s.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+}
+
+std::string aligned_columns(const std::vector<std::vector<std::string>>& rows,
+                            const std::vector<bool>& right, const std::string& indent) {
+  std::vector<std::size_t> width;
+  for (const auto& row : rows) {
+    if (width.size() < row.size()) width.resize(row.size(), 0);
+    for (std::size_t j = 0; j < row.size(); ++j) width[j] = std::max(width[j], text_width(row[j]));
+  }
+  std::string out;
+  for (const auto& row : rows) {
+    std::string line = indent;
+    for (std::size_t j = 0; j < row.size(); ++j) {
+      const std::string pad(width[j] - text_width(row[j]), ' ');
+      if (j > 0) line += "  ";
+      line += j < right.size() && right[j] ? pad + row[j] : row[j] + pad;
+    }
+    while (!line.empty() && line.back() == ' ') line.pop_back();
+    out += line + "\n";
+  }
+  return out;
+}
+
 std::string html_escape(const std::string& s) {
   std::string out;
   out.reserve(s.size());

@@ -68,6 +68,18 @@ class Document {
 /// Escapes &, <, >, " for HTML text and attributes.
 std::string html_escape(const std::string& s);
 
+// ---- Plain-text tables (the command line's summaries) -----------------------------------------
+
+/// The width of UTF-8 text on a terminal: its code points, so that "–" and "±" count as one.
+std::size_t text_width(const std::string& s);
+/// `rows` as lines of columns, each padded to its widest cell (text_width) and two spaces apart,
+/// after `indent`; column j is right-aligned when right[j] (numbers), else left-aligned. Rows may
+/// have fewer cells than others; no line ends in blanks.
+///   aligned_columns({{"slit", "ok", "1.5"}, {"global_localization", "ok", "12.0"}},
+///                   {false, false, true});
+std::string aligned_columns(const std::vector<std::vector<std::string>>& rows,
+                            const std::vector<bool>& right = {}, const std::string& indent = "  ");
+
 // ---- Numbers ----------------------------------------------------------------------------------
 
 /// "12.3" with `digits` decimals; "–" when the value is missing, null or not a number.

@@ -1,7 +1,9 @@
 // The reproduction report as a whole: its introduction, summary and closing blocks around the
 // sections (apps/report_control.cpp, apps/report_filters.cpp), and the side-by-side tables as
 // CSV files.
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 
@@ -74,6 +76,14 @@ void introduction(Document& doc, const json& results, const Numbers& numbers) {
       }
       figures.rows.push_back({key, f.value("status", std::string("?")), detail});
     }
+  // By the figures' numbers: the JSON object sorts its keys as text (figure10 before figure2).
+  const auto figure_number = [](const std::string& key) {
+    const auto digit = key.find_first_of("0123456789");
+    return digit == std::string::npos ? 0 : std::atoi(key.c_str() + digit);
+  };
+  std::stable_sort(figures.rows.begin(), figures.rows.end(), [&](const auto& a, const auto& b) {
+    return figure_number(a[0]) < figure_number(b[0]);
+  });
   doc.table(figures);
 }
 
