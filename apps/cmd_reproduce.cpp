@@ -6,7 +6,7 @@
 // python/plots/figureN.py from the CSV files the experiments write; a missing or failing script
 // marks that figure failed without stopping the report.
 
-#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -15,6 +15,7 @@
 #include <ctime>
 #include <fstream>
 #include <functional>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -88,22 +89,9 @@ std::string folder_name(const std::string& label) {
   return out;
 }
 
-// Atomic: a killed run leaves the previous file, not a half-written one.
+// Atomic (OutputFile): a killed run leaves the previous file, not a half-written one.
 void write_text(const std::filesystem::path& file, const std::string& text) {
-  OutputFile out(file);
-  out.stream() << text;
-  out.commit();
-}
-
-std::string shell_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) {
-    if (c == '\'')
-      out += "'\\''";
-    else
-      out += c;
-  }
-  return out + "'";
+  write_output_file(file, text);
 }
 
 std::string tail(const std::filesystem::path& file, std::size_t lines) {
@@ -213,11 +201,10 @@ json draw_figures(const json& results, const std::filesystem::path& dir, bool no
       std::filesystem::remove(svg);
       if (show) fmt::print(stderr, "reproduce: drawing {}\n", key);
       const auto start = std::chrono::steady_clock::now();
-      const std::string command =
-          fmt::format("{} {} {} > {} 2>&1", shell_quote(python), shell_quote(script.string()),
-                      shell_quote(dir.string()), shell_quote(log.string()));
-      const int raw = std::system(command.c_str());
-      const int code = raw == -1 ? -1 : (WIFEXITED(raw) ? WEXITSTATUS(raw) : 128);
+      // Stopped with this program (run_child_process): a SIGINT or SIGTERM stops the script and
+      // removes its half-drawn figure, so nothing writes into DIR after the command ended.
+      const UnfinishedOutput drawing_png(png), drawing_svg(svg);
+      const int code = run_child_process({python, script.string(), dir.string()}, log);
       entry["seconds"] =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       entry["log"] = (std::filesystem::path("logs") / (key + ".log")).string();
@@ -239,6 +226,56 @@ json draw_figures(const json& results, const std::filesystem::path& dir, bool no
     figures[key] = entry;
   }
   return figures;
+}
+
+// ---- The files of a run ------------------------------------------------------------------------
+
+/// The files of this run in DIR, relative to it, sorted: every output written through OutputFile
+/// into DIR, the figures, and (with --report-only) the files the earlier run listed that still
+/// exist. results.json lists them under "files" with the run's "run_id" (docs/reproducing.md).
+json files_of_run(const json& results, const std::filesystem::path& dir) {
+  std::set<std::string> names;
+  auto add = [&](const std::filesystem::path& file) {
+    const auto relative = file.lexically_relative(dir);
+    if (!relative.empty() && *relative.begin() != "..") names.insert(relative.generic_string());
+  };
+  for (const auto& file : committed_output_paths()) add(file);
+  if (results.contains("files") && results["files"].is_array())
+    for (const auto& f : results["files"])
+      if (f.is_string() && std::filesystem::exists(dir / f.get<std::string>()))
+        add(dir / f.get<std::string>());
+  for (const auto& [key, figure] : results["figures"].items()) {
+    for (const auto& f : figure.value("files", json::array())) add(dir / f.get<std::string>());
+    if (figure.contains("log")) add(dir / figure["log"].get<std::string>());
+  }
+  for (const char* name : {"results.json", "report.md", "report.html"}) add(dir / name);
+  return json(std::vector<std::string>(names.begin(), names.end()));
+}
+
+/// Removes what an earlier run wrote into `dir`: the files its results.json lists (relative
+/// names inside DIR only, nothing else of the folder) and results.json and the reports, which
+/// would otherwise describe files this run is about to replace. An earlier run killed before it
+/// wrote results.json leaves files no results.json lists: those of the new run are listed.
+void remove_earlier_run(const std::filesystem::path& dir) {
+  const auto file = dir / "results.json";
+  std::vector<std::string> listed;
+  try {
+    const json earlier = read_results(file);
+    for (const auto& f : earlier.value("files", json::array()))
+      if (f.is_string()) listed.push_back(f.get<std::string>());
+  } catch (const std::exception&) {
+    // No earlier run, or not one of ours: nothing of it is removed.
+  }
+  for (const char* name : {"results.json", "report.md", "report.html"}) listed.emplace_back(name);
+  for (const auto& name : listed) {
+    const std::filesystem::path relative(name);
+    const bool inside = relative.is_relative() && !relative.empty() &&
+                        std::none_of(relative.begin(), relative.end(),
+                                     [](const auto& part) { return part == ".."; });
+    std::error_code ec;
+    if (inside && std::filesystem::is_regular_file(dir / relative, ec))
+      std::filesystem::remove(dir / relative, ec);
+  }
 }
 
 // ---- The run -----------------------------------------------------------------------------------
@@ -316,10 +353,11 @@ std::string command_line(const RunContext& ctx, const ReproduceOptions& opt) {
 }
 
 /// Writes results.json, the table CSVs, the figures and the report; returns the exit code.
-int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt) {
+int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt,
+           const std::filesystem::path& source) {
   const auto& dir = ctx.out_dir;
   // Tables and a first results.json before the plot scripts, which may read both.
-  results["tables"] = report::write_table_csvs(results, dir);
+  results["tables"] = report::write_table_csvs(results, dir, source);
   results["figures"] = json::object();
   write_text(dir / "results.json", results.dump(2) + "\n");
   gather_summaries(results, dir, "mcl_summary.csv");
@@ -327,6 +365,7 @@ int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt) {
   // Under MPI only rank 0's figures are kept (apps/parallel_runs.hpp): the others draw none.
   results["figures"] =
       draw_figures(results, dir, opt.no_figures || rank_index() != 0, ctx.show_progress());
+  results["files"] = files_of_run(results, dir);
   write_text(dir / "results.json", results.dump(2) + "\n");
   const auto doc = report::build_report(results, dir);
   write_text(dir / "report.md", doc.markdown());
@@ -369,13 +408,15 @@ int reproduce(RunContext ctx, const ReproduceOptions& opt) {
     const auto file = ctx.out_dir / "results.json";
     results = read_results(file);
     try {
-      return finish(results, ctx, opt);
+      return finish(results, ctx, opt, file);
     } catch (const json::exception& e) {
       // A wrongly typed value: the library's message alone does not say which file.
       throw ParseError(fmt::format("{}: unexpected content ({})", file.string(), e.what()));
     }
   }
   const auto start = std::chrono::steady_clock::now();
+  // Before anything is written: an earlier run's files go, so that DIR never mixes two runs.
+  remove_earlier_run(ctx.out_dir);
   ThreadLimit limit(ctx.threads);
   const Plan plan = make_plan(opt.quick, opt.only);
   results["schema"] = "implicit-reproduce-1";
@@ -392,6 +433,7 @@ int reproduce(RunContext ctx, const ReproduceOptions& opt) {
   results["only"] = opt.only;
   results["command"] = command_line(ctx, opt);
   results["started_utc"] = utc_now();
+  results["run_id"] = fmt::format("{}-{}", results["started_utc"].get<std::string>(), ::getpid());
   results["settings"] = plan.settings;
   results["paper"] = report::paper_numbers();
   results["reference"] = report::reference_numbers();
@@ -399,7 +441,7 @@ int reproduce(RunContext ctx, const ReproduceOptions& opt) {
   results["experiments"] = run_plan(plan, ctx, opt);
   results["seconds_total"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return finish(results, ctx, opt);
+  return finish(results, ctx, opt, ctx.out_dir / "results.json");
 }
 
 Registrar register_reproduce{

@@ -14,8 +14,6 @@
 // any no-return beam has none.
 #include "cmd_simulate_laser.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -146,35 +144,6 @@ robot::OccupancyGrid load_named_map(const std::string& file) {
     throw ParseError(fmt::format("simulate --map: {}", e.what()));
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(fmt::format("simulate --map: {}", e.what()));
-  }
-}
-
-/// Writes `text` to `file` under a temporary name, renamed when complete; gzip for a name
-/// ending in .gz (read_carmen detects it).
-void write_atomically(const std::filesystem::path& file, const std::string& text) {
-  if (file.extension() != ".gz") {
-    OutputFile out(file);
-    out.stream() << text;
-    out.commit();
-    return;
-  }
-  std::filesystem::path tmp = file;
-  tmp += fmt::format(".tmp{}.gz", ::getpid());  // ends in .gz: write_text_file compresses
-  std::error_code ec;
-  try {
-    robot::write_text_file(tmp, text);
-  } catch (const InvalidArgument& e) {
-    std::filesystem::remove(tmp, ec);
-    throw InvalidArgument(fmt::format(
-        "{}: expected a writable output file, got a failed write ({})", file.string(), e.what()));
-  }
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw InvalidArgument(
-        fmt::format("{}: expected a writable output file, got a failed rename ({})", file.string(),
-                    ec.message()));
   }
 }
 
@@ -396,8 +365,10 @@ void run_laser_simulation(const LaserSimulationCommand& c, double range_sd, cons
           kMaxReadings, scans, c.beams, motion.duration(), c.speed, c.scan_period);
   const auto count = static_cast<std::size_t>(scans);
   const Tour tour = drive_tour(c, map, motion, count, extra_end, range_sd, ctx.seed);
-  write_atomically(ctx.out_dir, robot_log ? robot_log_text(c, tour, map_record, range_sd, ctx.seed)
-                                          : carmen_text(c, tour, w, range_sd, ctx.seed));
+  // Under a temporary name, renamed when complete; gzip for a name ending in .gz (read_carmen
+  // detects it).
+  write_output_file(ctx.out_dir, robot_log ? robot_log_text(c, tour, map_record, range_sd, ctx.seed)
+                                           : carmen_text(c, tour, w, range_sd, ctx.seed));
   const auto n = static_cast<std::size_t>(c.beams);
   const double increment = tour.scans.front().angle_increment;
   const std::size_t hits = tour.hits, no_return = tour.no_returns;

@@ -1,6 +1,10 @@
 #include "context.hpp"
 
+#include <fcntl.h>
 #include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
@@ -105,30 +110,8 @@ std::filesystem::path RunContext::csv_path(const std::string& name) const {
 }
 
 namespace {
-// Temporary files being written, for the signal handler: fixed storage, since a handler may only
-// read memory and call async-signal-safe functions (unlink, write, _exit).
-constexpr int kSlots = 64;
-constexpr std::size_t kPathBytes = 4096;
-char pending_paths[kSlots][kPathBytes];
-std::atomic<bool> pending_used[kSlots];
-std::atomic<int> outputs_completed{0};
-
-int register_pending(const std::filesystem::path& p) {
-  const std::string s = p.string();
-  if (s.size() >= kPathBytes) return -1;
-  for (int i = 0; i < kSlots; ++i) {
-    bool expected = false;
-    if (!pending_used[i].load() && pending_used[i].compare_exchange_strong(expected, true)) {
-      std::copy(s.c_str(), s.c_str() + s.size() + 1, pending_paths[i]);
-      return i;
-    }
-  }
-  return -1;  // more than kSlots at once: that file's temporary name may remain after a signal
-}
-
-void release_pending(int slot) {
-  if (slot >= 0) pending_used[slot].store(false);
-}
+// The plot script (or other child) being waited for: the signal handler stops its process group.
+std::atomic<pid_t> running_child{0};
 
 void write_stderr(const char* text) {
   std::size_t n = 0;
@@ -136,10 +119,26 @@ void write_stderr(const char* text) {
   [[maybe_unused]] const auto ignored = ::write(STDERR_FILENO, text, n);
 }
 
+// Only async-signal-safe calls: kill, waitpid, nanosleep. SIGTERM first (python exits at once);
+// SIGKILL after two seconds for a child that ignores it.
+void stop_running_child() {
+  const pid_t child = running_child.load();
+  if (child <= 0) return;
+  ::kill(-child, SIGTERM);
+  for (int i = 0; i < 200; ++i) {
+    const pid_t r = ::waitpid(child, nullptr, WNOHANG);
+    if (r == child || (r < 0 && errno != EINTR)) return;  // ended (or reaped by the main thread)
+    const timespec pause{0, 10'000'000};
+    ::nanosleep(&pause, nullptr);
+  }
+  ::kill(-child, SIGKILL);
+  ::waitpid(child, nullptr, 0);
+}
+
 extern "C" void on_stop_signal(int signal) {
-  int removed = 0;
-  for (int i = 0; i < kSlots; ++i)
-    if (pending_used[i].load() && ::unlink(pending_paths[i]) == 0) ++removed;
+  // The child first: it could otherwise recreate a file just removed.
+  stop_running_child();
+  const int removed = remove_unfinished_outputs();
   // Digits by hand: snprintf is not async-signal-safe.
   char number[16];
   auto digits = [&number](int v) {
@@ -155,7 +154,7 @@ extern "C" void on_stop_signal(int signal) {
   };
   write_stderr(signal == SIGINT ? "\nimplicit: stopped by SIGINT; "
                                 : "\nimplicit: stopped by SIGTERM; ");
-  write_stderr(digits(outputs_completed.load()));
+  write_stderr(digits(completed_outputs()));
   write_stderr(" output file(s) were complete and are kept, ");
   write_stderr(digits(removed));
   write_stderr(" unfinished one(s) removed\n");
@@ -171,48 +170,59 @@ void install_signal_handlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-OutputFile::OutputFile(std::filesystem::path path, Mode mode, std::string flag)
-    : path_(std::move(path)), flag_(std::move(flag)) {
-  // Same folder, so that the rename is atomic; the pid keeps concurrent runs apart.
-  temporary_ = path_;
-  temporary_ += fmt::format(".tmp{}", ::getpid());
-  std::error_code ec;
-  fresh_ = !std::filesystem::exists(path_, ec);
-  if (mode == Mode::kAppend && !fresh_)
-    std::filesystem::copy_file(path_, temporary_, std::filesystem::copy_options::overwrite_existing,
-                               ec);
-  slot_ = register_pending(temporary_);
-  out_ = std::make_unique<std::ofstream>(
-      temporary_, mode == Mode::kAppend && !fresh_ ? std::ios::app : std::ios::trunc);
-}
-
-OutputFile::~OutputFile() {
-  if (committed_) return;
-  out_.reset();
-  std::error_code ec;
-  std::filesystem::remove(temporary_, ec);
-  release_pending(slot_);
-}
-
-std::ostream& OutputFile::stream() { return *out_; }
-
-void OutputFile::commit() {
-  out_->flush();
-  const bool written = static_cast<bool>(*out_);
-  out_->close();
-  std::error_code ec;
-  if (written && !out_->fail()) std::filesystem::rename(temporary_, path_, ec);
-  if (!written || out_->fail() || ec) {
-    std::filesystem::remove(temporary_, ec);
-    release_pending(slot_);
-    slot_ = -1;
-    throw InvalidArgument(
-        fmt::format("{}: {}: expected a writable output file, got a failed write{}", flag_,
-                    path_.string(), ec ? " (" + ec.message() + ")" : ""));
+int run_child_process(const std::vector<std::string>& args, const std::filesystem::path& log) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  // The log too is written under a temporary name and renamed when the child ended; a signal
+  // removes it with the other unfinished outputs.
+  std::filesystem::path partial_log = log;
+  partial_log += fmt::format(".tmp{}", ::getpid());
+  const UnfinishedOutput unfinished_log(partial_log);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, partial_log.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  sigset_t stop_signals, none, previous;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  sigemptyset(&none);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  // A group of its own (what the handler stops), default SIGINT/SIGTERM actions, nothing blocked.
+  posix_spawnattr_setpgroup(&attributes, 0);
+  posix_spawnattr_setsigdefault(&attributes, &stop_signals);
+  posix_spawnattr_setsigmask(&attributes, &none);
+  posix_spawnattr_setflags(&attributes,
+                           POSIX_SPAWN_SETPGROUP | POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  // Blocked on this thread until the child is registered: a signal handled in between would
+  // leave it running (one taken by a worker thread in that instant still can).
+  pthread_sigmask(SIG_BLOCK, &stop_signals, &previous);
+  pid_t pid = 0;
+  const int spawned = posix_spawnp(&pid, argv[0], &actions, &attributes, argv.data(), environ);
+  if (spawned == 0) running_child.store(pid);
+  pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+  posix_spawnattr_destroy(&attributes);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) {
+    std::error_code ignored;
+    std::filesystem::remove(partial_log, ignored);
+    write_output_file(log,
+                      fmt::format("cannot run {}: {}\n", args.front(), std::strerror(spawned)));
+    return 127;
   }
-  committed_ = true;
-  release_pending(slot_);
-  ++outputs_completed;
+  int status = 0;
+  pid_t waited = -1;
+  do {
+    waited = ::waitpid(pid, &status, 0);
+  } while (waited < 0 && errno == EINTR);
+  running_child.store(0);
+  std::error_code ec;
+  std::filesystem::rename(partial_log, log, ec);
+  if (waited < 0) return 128;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 void print_json(nlohmann::json result) {

@@ -16,6 +16,8 @@
 #include <fmt/ostream.h>
 #include <nlohmann/json_fwd.hpp>
 
+#include "implicit/core/output_file.hpp"
+
 namespace implicit::app {
 
 /// Progress on stderr: a bar with ETA when stderr is a terminal, plain lines otherwise,
@@ -73,45 +75,18 @@ struct RunContext {
 /// the raw filesystem error named neither the flag nor what was expected.
 void create_out_dir(const std::filesystem::path& dir);
 
-/// An output file written under a temporary name beside `path` and renamed over it by commit(),
-/// which first checks that every write succeeded: a failed or killed run leaves the previous file
-/// (or none), never a half-written one. Without commit() the temporary file is removed.
-/// Append mode starts from a copy of the existing file (the *_summary.csv files).
-///   OutputFile out(ctx.csv_path("runs.csv"));
-///   out.stream() << "a,b\n";
-///   out.commit();  // throws implicit::InvalidArgument naming `flag` and the file if a write
-///   failed
-class OutputFile {
- public:
-  enum class Mode { kReplace, kAppend };
-  /// `flag`: the option that chose where the file goes, named in the error.
-  explicit OutputFile(std::filesystem::path path, Mode mode = Mode::kReplace,
-                      std::string flag = "--out");
-  ~OutputFile();
-  OutputFile(const OutputFile&) = delete;
-  OutputFile& operator=(const OutputFile&) = delete;
-  std::ostream& stream();
-  /// Formatted text, as fmt::print (the CSV writers use it).
-  template <typename... T>
-  void print(fmt::format_string<T...> format, T&&... args) {
-    fmt::print(stream(), format, std::forward<T>(args)...);
-  }
-  /// True when the file did not exist before (to write a CSV header once in append mode).
-  bool fresh() const { return fresh_; }
-  void commit();
-
- private:
-  std::filesystem::path path_, temporary_;
-  std::string flag_;
-  std::unique_ptr<std::ofstream> out_;
-  bool fresh_ = true;
-  bool committed_ = false;
-  int slot_ = -1;  ///< where the signal handler finds the temporary name
-};
-
-/// SIGINT and SIGTERM: remove the outputs being written (their temporary files), say on stderr how
-/// many were completed (those are kept), and exit with 128 + the signal number. Called by main().
+/// SIGINT and SIGTERM: stop the child process being waited for (run_child_process) and wait for
+/// it, remove the outputs being written (their temporary files, OutputFile in
+/// implicit/core/output_file.hpp), say on stderr how many were completed (those are kept), and
+/// exit with 128 + the signal number. Called by main().
 void install_signal_handlers();
+
+/// Runs `args` (args[0] a path, or a name looked up in PATH) with stdout and stderr into `log`, in
+/// a process group of its own, and waits for it; returns its exit code (128 + the signal when a
+/// signal ended it, 127 when it could not be started, the reason then in `log`). A SIGINT or
+/// SIGTERM to this program stops that process group and waits for it before the program exits,
+/// so that no child (a plot script) keeps writing into the output folder after the command ended.
+int run_child_process(const std::vector<std::string>& args, const std::filesystem::path& log);
 
 /// Prints a subcommand's result on stdout as JSON, with the version and commit of this build.
 void print_json(nlohmann::json result);

@@ -5,7 +5,7 @@
 # bench_control link it as well; a target that links it also needs a transport (apps/transport/).
 set(IMPLICIT_EXPERIMENT_SOURCES
     exp_mcl.cpp exp_mcl_global.cpp exp_slam.cpp exp_slit.cpp slit_table.cpp exp_arm.cpp
-    exp_himmelblau.cpp parallel_runs.cpp context.cpp vehicle.cpp)
+    exp_himmelblau.cpp parallel_runs.cpp run_record.cpp context.cpp vehicle.cpp)
 list(TRANSFORM IMPLICIT_EXPERIMENT_SOURCES PREPEND ${PROJECT_SOURCE_DIR}/apps/)
 find_package(CLI11 REQUIRED)
 find_package(nlohmann_json REQUIRED)

@@ -98,31 +98,30 @@ fs::path record_path(const fs::path& folder, std::size_t index) {
 
 void write_record(const fs::path& folder, const std::string& key, std::size_t index,
                   const RunRecord& r) {
-  std::string text = key + "\n" + fmt::format("{}\n", r.size());
-  for (const double v : r) text += fmt::format("{:a}\n", v);
-  // Written whole, then renamed: a run interrupted while writing leaves no record.
-  const fs::path file = record_path(folder, index);
-  const fs::path tmp = file.string() + fmt::format(".tmp{}", ::getpid());
-  {
-    std::ofstream os(tmp, std::ios::binary);
-    os << text;
-    if (!os) return;  // a missing record only costs a recomputation
+  // Written whole, then renamed (OutputFile): a run interrupted while writing leaves no record.
+  try {
+    OutputFile out(record_path(folder, index), OutputFile::Mode::kRecord);
+    out.stream() << format_run_record(key, r);
+    out.commit();
+  } catch (const InvalidArgument&) {
+    // A missing record only costs a recomputation with --resume.
   }
-  std::error_code ec;
-  fs::rename(tmp, file, ec);
 }
 
+// A missing record: false. A damaged one (a 0-byte file after a full disk, an edited one): false
+// and a warning on stderr naming the file and why, since its run is then computed again.
 bool read_record(const fs::path& folder, const std::string& key, std::size_t index, RunRecord& r) {
-  std::ifstream is(record_path(folder, index));
-  std::string line;
-  if (!is || !std::getline(is, line) || line != key || !std::getline(is, line)) return false;
-  const std::size_t count = std::strtoull(line.c_str(), nullptr, 10);
-  r.assign(count, 0.0);
-  for (auto& v : r) {
-    if (!std::getline(is, line)) return false;
-    v = std::strtod(line.c_str(), nullptr);
-  }
-  return true;
+  const fs::path file = record_path(folder, index);
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return false;
+  std::ifstream is(file, std::ios::binary);
+  std::ostringstream text;
+  text << is.rdbuf();
+  const std::string why = is ? parse_run_record(text.str(), key, r) : "got an unreadable file";
+  if (why.empty()) return true;
+  fmt::print(stderr, "implicit: --resume: {}: {}; ignored, run {} is computed again\n",
+             file.string(), why, index);
+  return false;
 }
 
 // ---- Assignment of the runs to this rank -----------------------------------------------------

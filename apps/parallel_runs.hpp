@@ -26,10 +26,9 @@
 #include <vector>
 
 #include "context.hpp"
+#include "run_record.hpp"
 
 namespace implicit::app {
-
-using RunRecord = std::vector<double>;
 
 /// Runs run(i) for i in [0, n) over the ranks and threads; returns the n records in run order.
 /// `experiment` and `settings` identify the loop for --resume (settings: every option the records

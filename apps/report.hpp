@@ -179,8 +179,11 @@ Document build_report(const nlohmann::json& results, const std::filesystem::path
 
 /// Writes the side-by-side tables as CSV (table2_slit.csv, table5_mcl.csv, table6_slam.csv)
 /// into `dir`; returns the file names written. Rows exist only for configurations that ran.
+/// A setting or result of the wrong type (a string where a number belongs) is refused with a
+/// ParseError naming `source` (where `results` came from) and the key path.
 std::vector<std::string> write_table_csvs(const nlohmann::json& results,
-                                          const std::filesystem::path& dir);
+                                          const std::filesystem::path& dir,
+                                          const std::filesystem::path& source = "results.json");
 
 /// Reads a small CSV file (comma-separated, no quoting) into a table; throws ParseError naming
 /// the file and line when a row has the wrong number of fields.

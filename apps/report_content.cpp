@@ -4,12 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <functional>
 
 #include <fmt/format.h>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/output_file.hpp"
 #include "report_parts.hpp"
 
 namespace implicit::app::report {
@@ -152,36 +152,55 @@ std::string csv_value(const json& j) {
 
 void write_csv(const std::filesystem::path& file, const std::vector<std::string>& columns,
                const std::vector<std::vector<std::string>>& rows) {
-  // The tables go into the folder of --out (or of --report-only's results.json, the same flag).
-  auto fail = [&file](const char* what) {
-    throw InvalidArgument(
-        fmt::format("--out: {}: expected a writable output file, got {}", file.string(), what));
-  };
-  std::ofstream out(file);
-  if (!out) fail("one that cannot be opened");
-  for (std::size_t i = 0; i < columns.size(); ++i) out << (i ? "," : "") << columns[i];
-  out << "\n";
+  // The tables go into the folder of --out (or of --report-only's results.json, the same flag);
+  // under a temporary name, renamed when complete (OutputFile).
+  OutputFile out(file);
+  for (std::size_t i = 0; i < columns.size(); ++i) out.stream() << (i ? "," : "") << columns[i];
+  out.stream() << "\n";
   for (const auto& row : rows) {
-    for (std::size_t i = 0; i < row.size(); ++i) out << (i ? "," : "") << row[i];
-    out << "\n";
+    for (std::size_t i = 0; i < row.size(); ++i) out.stream() << (i ? "," : "") << row[i];
+    out.stream() << "\n";
   }
-  out.flush();
-  if (!out) fail("a failed write");
+  out.commit();
+}
+
+// The settings that are names; every other setting and result in a table is a number (or null:
+// not computed). results.json may have been edited: a string where a number belongs would
+// otherwise be copied into the CSV as if it were a result.
+bool table_text_setting(const std::string& key) {
+  return key == "mode" || key == "config" || key == "method";
+}
+
+std::string checked_csv_value(const json& value, bool text, const std::string& where,
+                              const std::filesystem::path& source) {
+  const bool fits =
+      value.is_null() || (text ? value.is_string() : value.is_number() || value.is_boolean());
+  if (!fits)
+    throw ParseError(fmt::format("{}: expected {} at {}, got {} (a {})", source.string(),
+                                 text ? "a name (a string)" : "a number or null", where,
+                                 printable(value.dump(), 60), value.type_name()));
+  return csv_value(value);
 }
 
 /// One row per successful configuration: settings columns, then result columns.
 std::vector<std::vector<std::string>> rows_of(
-    const json& results, const std::string& experiment,
+    const json& results, const std::string& experiment, const std::filesystem::path& source,
     const std::vector<std::string>& settings_keys, const std::vector<std::string>& result_keys,
     const std::function<std::vector<std::string>(const json& settings)>& extra) {
   std::vector<std::vector<std::string>> rows;
-  for (const auto& run : experiment_runs(results, experiment)) {
+  const auto& runs = experiment_runs(results, experiment);
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const auto& run = runs[i];
     if (!ok(&run)) continue;
     const auto& s = run.at("settings");
     const auto& r = run.at("result");
+    const std::string where = fmt::format("/experiments/{}/runs/{}", experiment, i);
     std::vector<std::string> row;
-    for (const auto& k : settings_keys) row.push_back(csv_value(get(s, k)));
-    for (const auto& k : result_keys) row.push_back(csv_value(get(r, k)));
+    for (const auto& k : settings_keys)
+      row.push_back(
+          checked_csv_value(get(s, k), table_text_setting(k), where + "/settings/" + k, source));
+    for (const auto& k : result_keys)
+      row.push_back(checked_csv_value(get(r, k), false, where + "/result/" + k, source));
     for (auto& e : extra(s)) row.push_back(std::move(e));
     rows.push_back(std::move(row));
   }
@@ -197,7 +216,8 @@ std::string paper_lookup(const json& table, const std::string& key, int m) {
 
 }  // namespace
 
-std::vector<std::string> write_table_csvs(const json& results, const std::filesystem::path& dir) {
+std::vector<std::string> write_table_csvs(const json& results, const std::filesystem::path& dir,
+                                          const std::filesystem::path& source) {
   std::filesystem::create_directories(dir);
   const json paper = numbers_of(results).paper;
   std::vector<std::string> written;
@@ -212,7 +232,7 @@ std::vector<std::string> write_table_csvs(const json& results, const std::filesy
          {"paper_error_x_mean", "paper_error_x_std", "paper_error_u_mean", "paper_error_u_std"})
       columns.emplace_back(c);
     const auto& t2 = paper["table2"];
-    auto rows = rows_of(results, "slit", s, r, [&](const json& settings) {
+    auto rows = rows_of(results, "slit", source, s, r, [&](const json& settings) {
       const int m = settings.value("samples", 0);
       return std::vector<std::string>{
           paper_lookup(t2, "error_x_mean", m), paper_lookup(t2, "error_x_std", m),
@@ -238,7 +258,7 @@ std::vector<std::string> write_table_csvs(const json& results, const std::filesy
     columns.emplace_back("paper_error_percent");
     columns.emplace_back("paper_cpu_ms");
     const auto& t5 = paper["table5"];
-    auto rows = rows_of(results, "mcl", s, r, [&](const json& settings) {
+    auto rows = rows_of(results, "mcl", source, s, r, [&](const json& settings) {
       const std::string method = settings.value("method", std::string());
       const int m = settings.value("particles", 0);
       if (settings.value("config", std::string()) != "A") return std::vector<std::string>{"", ""};
@@ -259,7 +279,7 @@ std::vector<std::string> write_table_csvs(const json& results, const std::filesy
     columns.emplace_back("paper_error_percent");
     columns.emplace_back("paper_cpu_ms");
     const auto& t6 = paper["table6"];
-    auto rows = rows_of(results, "slam", s, r, [&](const json& settings) {
+    auto rows = rows_of(results, "slam", source, s, r, [&](const json& settings) {
       const std::string method = settings.value("method", std::string());
       const int m = settings.value("particles", 0);
       if (method == "ekf")

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/output_file.hpp"
 #include "implicit/robot/csv_table.hpp"
 
 namespace implicit::experiments {
@@ -27,19 +28,10 @@ std::string cache_key(const LaserDataOptions& o) {
                      o.max_updates);
 }
 
-/// Written under a temporary name and renamed: a killed run leaves the previous file or none,
-/// never half of one that the figure script would draw.
-void write_atomically(const std::filesystem::path& file, const std::string& text) {
-  std::filesystem::path tmp = file;
-  tmp += ".tmp";
-  robot::write_text_file(tmp, text);
-  std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InvalidArgument(fmt::format("laser_mcl figure: expected to write '{}', got: {}",
-                                      file.string(), ec.message()));
-  }
+/// Written under a temporary name and renamed (OutputFile): a killed run leaves the previous file
+/// or none, never half of one that the figure script would draw.
+void write_figure_csv(const std::filesystem::path& file, const std::string& text) {
+  write_output_file(file, text, "laser_mcl figure");
 }
 
 std::string map_csv(const robot::OccupancyGrid& map) {
@@ -126,9 +118,9 @@ void write_laser_figure_files(const LaserMclResult& r, const LaserDataset& d,
   std::filesystem::create_directories(dir, ec);
   require(!ec, "laser_mcl figure: expected a folder '{}' for the figure's files, got: {}",
           dir.string(), ec.message());
-  write_atomically(dir / "laser_mcl_map.csv", map_csv(d.map));
-  write_atomically(dir / "laser_mcl_reference.csv", reference_csv(d));
-  write_atomically(dir / fmt::format("laser_mcl_track_{}.csv", to_string(r.settings.proposal)),
+  write_figure_csv(dir / "laser_mcl_map.csv", map_csv(d.map));
+  write_figure_csv(dir / "laser_mcl_reference.csv", reference_csv(d));
+  write_figure_csv(dir / fmt::format("laser_mcl_track_{}.csv", to_string(r.settings.proposal)),
                    track_csv(r, d));
 }
 

@@ -1,8 +1,6 @@
 // ROS map_server map files (map_io.hpp): the YAML with yaml-cpp, the PGM image by hand.
 #include "implicit/robot/map_io.hpp"
 
-#include <unistd.h>
-
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -15,6 +13,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/output_file.hpp"
 #include "implicit/robot/csv_table.hpp"
 
 namespace implicit::robot {
@@ -416,34 +415,10 @@ std::string yaml_quoted(const std::string& s) {
   return out + "\"";
 }
 
-// Writes `content` under a temporary name beside `path`; returns that name.
-std::filesystem::path write_temporary(const std::filesystem::path& path,
-                                      const std::string& content) {
-  std::filesystem::path tmp = path;
-  tmp += fmt::format(".tmp{}", ::getpid());
-  std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-  out.write(content.data(), static_cast<std::streamsize>(content.size()));
-  out.close();
-  if (!out) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw InvalidArgument(
-        fmt::format("save_map: expected a writable file, got a failed write of "
-                    "'{}'",
-                    tmp.string()));
-  }
-  return tmp;
-}
-
-void rename_into_place(const std::filesystem::path& tmp, const std::filesystem::path& path) {
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw InvalidArgument(fmt::format("save_map: expected a writable file, got '{}' ({})",
-                                      path.string(), ec.message()));
-  }
+// The library's one writer (OutputFile: a temporary name, renamed when complete), with the
+// message saying which function wrote.
+[[noreturn]] void refuse_unwritable_map(const InvalidArgument& e) {
+  throw InvalidArgument(fmt::format("save_map: expected a writable file: {}", e.what()));
 }
 
 }  // namespace
@@ -486,24 +461,17 @@ void save_map(const OccupancyGrid& grid, const std::filesystem::path& yaml_file)
       yaml_quoted(image.filename().string()), grid.resolution(), grid.origin().x(),
       grid.origin().y());
 
-  const std::filesystem::path pgm_tmp = write_temporary(image, pgm);
-  std::filesystem::path yaml_tmp;
   try {
-    yaml_tmp = write_temporary(yaml_file, yaml);
-  } catch (...) {
-    std::error_code ignored;
-    std::filesystem::remove(pgm_tmp, ignored);
-    throw;
+    OutputFile pgm_file(image, OutputFile::Mode::kReplace, "");
+    OutputFile yaml_out(yaml_file, OutputFile::Mode::kReplace, "");
+    pgm_file.stream() << pgm;
+    yaml_out.stream() << yaml;
+    // The image first: a YAML file under its final name always names a complete image.
+    pgm_file.commit();
+    yaml_out.commit();
+  } catch (const InvalidArgument& e) {
+    refuse_unwritable_map(e);
   }
-  // The image first: a YAML file under its final name always names a complete image.
-  try {
-    rename_into_place(pgm_tmp, image);
-  } catch (...) {
-    std::error_code ignored;
-    std::filesystem::remove(yaml_tmp, ignored);
-    throw;
-  }
-  rename_into_place(yaml_tmp, yaml_file);
 }
 
 }  // namespace implicit::robot

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/output_file.hpp"
 #include "implicit/robot/csv_table.hpp"
 
 namespace implicit::robot {
@@ -58,23 +59,9 @@ std::string read_text_file(const std::filesystem::path& requested, std::size_t m
 }
 
 void write_text_file(const std::filesystem::path& path, const std::string& text) {
-  const std::string name = path.string();
-  if (path.extension() == ".gz") {
-    gzFile f = gzopen(name.c_str(), "wb9");
-    require(f != nullptr, "expected a writable file, got '{}'", name);
-    const int wrote =
-        text.empty() ? 0 : gzwrite(f, text.data(), static_cast<unsigned>(text.size()));
-    const int closed = gzclose(f);
-    require(wrote == static_cast<int>(text.size()) && closed == Z_OK,
-            "expected to write {} bytes to '{}', the gzip stream failed", text.size(), name);
-    return;
-  }
-  std::ofstream out(path, std::ios::binary);
-  require(static_cast<bool>(out), "expected a writable file, got '{}'", name);
-  out << text;
-  out.flush();
-  require(static_cast<bool>(out), "expected to write {} bytes to '{}', the write failed",
-          text.size(), name);
+  // Under a temporary name, renamed when complete (gzip for a .gz name): a killed process or a
+  // full disk never leaves half a log under the final name.
+  write_output_file(path, text, "");
 }
 
 }  // namespace implicit::robot

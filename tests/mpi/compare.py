@@ -15,7 +15,7 @@ import sys
 # Fields that measure the machine or name the output folder, not the result.
 TIMING = {"seconds", "seconds_total", "cpu_ms_per_step", "cpu_ms_per_step_median",
           "cpu_ms_per_step_std", "peak_memory_mb",
-          "threads", "wall_ms_per_step", "started_utc", "command"}
+          "threads", "wall_ms_per_step", "started_utc", "run_id", "command"}
 
 # Small settings of every subcommand whose runs are spread over the ranks, and the launches each
 # is compared in: "plain" is the MPI executable without a launcher, nS/nD N ranks with static or

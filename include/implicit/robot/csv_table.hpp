@@ -45,8 +45,9 @@ inline constexpr std::size_t kMaxTextFileBytes = std::size_t{256} << 20;
 std::string read_text_file(const std::filesystem::path& path,
                            std::size_t max_bytes = kMaxTextFileBytes);
 
-/// Writes `text` to `path`, gzip-compressed when the name ends in ".gz". Throws InvalidArgument
-/// naming the file when it cannot be written completely.
+/// Writes `text` to `path`, gzip-compressed when the name ends in ".gz", under a temporary name
+/// renamed when complete (OutputFile, implicit/core/output_file.hpp): never half a file under the
+/// final name. Throws InvalidArgument naming the file when it cannot be written completely.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 
 /// Reads a CSV whose header must equal `expected_header` exactly (gzip accepted, see
