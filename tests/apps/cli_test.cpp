@@ -220,6 +220,20 @@ TEST(PlotHelpers, FailLoudlyOnMissingOrMalformedCsv) {
   EXPECT_EQ(r.code, 0) << r.out << r.err;
 }
 
+// Every figure drawn from small data reads right, checked through matplotlib's API
+// (tests/apps/plots_figures_check.py): each log axis has at least two labelled ticks, no two texts
+// overlap, Figure 8's Car Park configs have their own markers, Figure 9's panels share one
+// y-range and name their runs, Figure 10's map is zoomed to the path.
+TEST(PlotHelpers, EveryFigureReadsRightOnSmallData) {
+  const std::string script =
+      std::string(IMPLICIT_SOURCE_DIR) + "/tests/apps/plots_figures_check.py";
+  const std::string plots = std::string(IMPLICIT_SOURCE_DIR) + "/python/plots";
+  TempDir dir("plots_figures");
+  const auto r =
+      run_shell("/usr/bin/python3 '" + script + "' '" + plots + "' '" + dir.path().string() + "'");
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+}
+
 // Each figure script fails (non-zero exit, names the missing file) on a folder without data.
 TEST(PlotHelpers, EveryFigureScriptFailsLoudlyWithoutData) {
   const std::filesystem::path plots =
