@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "implicit/core/error.hpp"
+#include "plural.hpp"
 
 namespace implicit::app {
 namespace {
@@ -68,13 +69,15 @@ void warn_vehicle_assumed(const std::string& command, const std::string& data_na
 void warn_skipped_scans(const std::string& command, const std::string& data_name,
                         const robot::StepSchedule& schedule, double dt) {
   if (schedule.observations_skipped == 0) return;
+  const auto skipped = static_cast<long long>(schedule.observations_skipped);
   fmt::print(stderr,
-             "implicit {}: warning: {} detections in {} scans of '{}' are not used: each scan is "
-             "applied at the control nearest in time, if within half a step ({} s), and at most "
-             "one scan per control; write a control record at (or within {} s of) every scan's "
-             "time (\"detections_skipped\" in the JSON counts them)\n",
-             command, schedule.observations_skipped, schedule.scans_skipped, data_name, 0.5 * dt,
-             0.5 * dt);
+             "implicit {}: warning: {} in {} of '{}' {} not used: each scan is applied at the "
+             "control nearest in time, if within half a step ({} s), and at most one scan per "
+             "control; write a control record at (or within {} s of) every scan's time "
+             "(\"detections_skipped\" in the JSON counts them)\n",
+             command, counted(skipped, "detection", "detections"),
+             counted(static_cast<long long>(schedule.scans_skipped), "scan", "scans"), data_name,
+             skipped == 1 ? "is" : "are", 0.5 * dt, 0.5 * dt);
 }
 
 robot::UteParams ute_params(const robot::RobotLog& log, const MotionNoise& noise,

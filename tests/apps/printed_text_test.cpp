@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -74,7 +75,9 @@ TEST(PrintedText, AlignedColumnsLineUpForAnyWidthAndUtf8) {
     ASSERT_GE(starts.size(), 2u) << line;
     EXPECT_EQ(starts[0], 2u) << line;  // the indent
     EXPECT_EQ(starts[1], first[1]) << text;
-    if (starts.size() == 3) EXPECT_EQ(report::text_width(line), report::text_width(lines[1]));
+    if (starts.size() == 3) {
+      EXPECT_EQ(report::text_width(line), report::text_width(lines[1])) << text;
+    }
     EXPECT_NE(line.back(), ' ') << "trailing blanks: '" << line << "'";
   }
   // The widest first cell decides: two blanks after it.
@@ -117,6 +120,25 @@ TEST(PrintedText, OneIsSingular) {
   ASSERT_EQ(himmelblau.code, 0) << himmelblau.err;
   EXPECT_NE(himmelblau.out.find("1 run,"), std::string::npos) << himmelblau.out;
   EXPECT_EQ(himmelblau.out.find("1 runs"), std::string::npos) << himmelblau.out;
+}
+
+TEST(PrintedText, OneSkippedScanIsSingular) {
+  TempDir dir("printed_skipped");
+  const auto log = dir.path() / "one_extra_scan.log";
+  {
+    std::ofstream out(log);
+    out << "vehicle unicycle dt=0.1\nlandmark 1 5 0\ninitial 0 0 0 0 0.1 0.1 0.01\n";
+    for (int k = 1; k <= 20; ++k) out << "control " << 0.1 * k << " 1 0\n";
+    for (int k = 1; k <= 19; ++k) {
+      out << "scan " << 0.1 * k + 0.01 << " 1\nobs 5 1.5708 1\n";
+      // A second scan on the first control: the schedule leaves it out.
+      if (k == 1) out << "scan 0.12 1\nobs 5 1.5708 1\n";
+    }
+  }
+  const auto r = run_cli("mcl -M 20 --runs 1 --data '" + log.string() + "' --allow-empty --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: 1 detection in 1 scan of"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("is not used"), std::string::npos) << r.err;
 }
 
 TEST(PrintedText, AnotherLogIsNamedWithItsModelNotACarParkConfig) {
