@@ -19,6 +19,7 @@ struct MclCommand {
   MclSettings settings;
   RunContext ctx;
   bool allow_empty = false;
+  CLI::Option* particles = nullptr;  ///< -M, to tell a given count from the default
   LaserCommand laser;
   std::string map;  ///< --map: linear|random (landmark), or a map file (laser)
 };
@@ -91,9 +92,12 @@ void setup_mcl(CLI::App& sub) {
                  "standard: bootstrap MCL; implicit: implicit sampling per particle")
       ->check(CLI::IsMember({"standard", "implicit"}))
       ->capture_default_str();
-  sub.add_option("--particles,-M", cmd->settings.particles, "Particles M")
-      ->check(in_range(1, 10000000))
-      ->capture_default_str();
+  cmd->particles =
+      sub.add_option("--particles,-M", cmd->settings.particles,
+                     "Particles M (landmarks, --init global without -M: KLD-sampling between "
+                     "--min-particles and --max-particles instead, AMCL's way)")
+          ->check(in_range(1, 10000000))
+          ->capture_default_str();
   sub.add_option("--runs", cmd->settings.runs, "Runs with different seeds")
       ->check(in_range(1, 100000))
       ->capture_default_str();
@@ -181,6 +185,9 @@ void setup_mcl(CLI::App& sub) {
       cmd->settings.map = cmd->map;
     }
     cmd->settings.allow_empty = cmd->allow_empty;
+    // M = 100 is the tracking default; started without a pose it finds the car in too few runs,
+    // so a global start without -M adapts its count by KLD-sampling (spec §3.11).
+    if (cmd->settings.init == "global" && cmd->particles->count() == 0) cmd->settings.kld = true;
     const auto r = run_mcl(cmd->settings, cmd->ctx);
     const auto check = [&] {
       require_scored(r, "mcl", {"error_percent_mean", "rmse_m"}, {}, cmd->allow_empty);

@@ -103,6 +103,12 @@ void add_laser_options(CLI::App& sub, LaserCommand& l) {
                  "motion prior); the lowest minimum centres the proposal (weights stay exact)")
       ->check(in_range(1, 64))
       ->capture_default_str();
+  sub.add_option("--defensive", s.implicit_defensive,
+                 "laser, implicit (linear map): share of samples drawn from the motion prior "
+                 "instead, weighted by the mixture's density (a particle survives when every "
+                 "Newton start found the wrong minimum)")
+      ->check(in_range(0.0, 0.99))
+      ->capture_default_str();
   sub.add_option("--trajectory", l.trajectory,
                  "laser: write the first run's estimate as a TUM trajectory file (t x y z qx qy qz "
                  "qw)");

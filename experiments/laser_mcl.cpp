@@ -37,6 +37,12 @@ void LaserMclSettings::validate() const {
   require(runs >= 1 && runs <= 100000, "laser MCL: expected 1 to 100000 runs, got {}", runs);
   require(implicit_starts >= 1 && implicit_starts <= 64,
           "laser MCL: expected 1 to 64 Newton starts per particle, got {}", implicit_starts);
+  require(implicit_defensive >= 0 && implicit_defensive < 1,
+          "laser MCL: expected a defensive share in [0, 1), got {}", implicit_defensive);
+  require(implicit_defensive == 0 || implicit_map == filter::ImplicitMap::kLinear,
+          "laser MCL: the defensive share needs the linear map (the random map's density is not "
+          "known in closed form), got a share of {} with the random map",
+          implicit_defensive);
   odometry_noise.validate();
   filter_alphas.validate();
   laser.validate();
@@ -246,6 +252,7 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
       filter::ImplicitProposal p;
       p.map = settings.implicit_map;
       p.starts = settings.implicit_starts;
+      p.defensive = settings.implicit_defensive;
       return run_one(settings, d, model, space, p, seed, first, last);
     };
   }
@@ -310,6 +317,7 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
   j["implicit_map"] = s.implicit_map == filter::ImplicitMap::kLinear ? "linear" : "random";
   j["start"] = to_string(s.start);
   j["implicit_starts"] = s.implicit_starts;
+  j["implicit_defensive"] = s.implicit_defensive;
   j["particles"] = s.particles;
   j["runs"] = s.runs;
   j["seed"] = s.seed;

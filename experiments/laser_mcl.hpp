@@ -113,6 +113,8 @@ struct LaserMclSettings {
   ProposalKind proposal = ProposalKind::kImplicit;
   filter::ImplicitMap implicit_map = filter::ImplicitMap::kLinear;
   int implicit_starts = 2;  ///< Newton starts per particle (ImplicitProposal::starts)
+  /// Share of implicit samples drawn from the motion prior (ImplicitProposal::defensive).
+  double implicit_defensive = 0.0;
   std::size_t particles = 100;
   int runs = 10;
   std::uint64_t seed = 1;

@@ -89,7 +89,7 @@ TEST(Cli, SubcommandHelpShowsItsOwnExamples) {
 }
 
 TEST(Cli, JsonCarriesVersionAndCommit) {
-  const auto r = run_cli("arm --json --quiet");
+  const auto r = run_cli("arm --estimator closed-form --json --quiet");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(j.contains("version") && j["version"].is_string()) << r.out;
@@ -330,8 +330,8 @@ TEST(Cli, ReportOnlyWithJsonNestedTooDeepNamesTheFileAndTheLevel) {
 // slit, arm and himmelblau write their CSVs like mcl and slam: under temporary names renamed
 // only when complete, so an unwritable folder is an error (exit 1) naming the file.
 TEST(Cli, ControlCommandsOutIntoUnwritableFolderExit1) {
-  for (const std::string command :
-       {"slit --runs 2 --naive-small 5 --naive-large 5", "arm", "himmelblau --runs 2 -M 10"}) {
+  for (const std::string command : {"slit --runs 2 --naive-small 5 --naive-large 5",
+                                    "arm --estimator closed-form", "himmelblau --runs 2 -M 10"}) {
     const auto r = run_cli(command + " --quiet --out /proc/self");
     EXPECT_EQ(r.code, 1) << command << "\n" << r.err;
     EXPECT_NE(r.err.find("expected a writable output file"), std::string::npos) << command << "\n"
@@ -351,10 +351,10 @@ TEST(Cli, EveryOutputErrorNamesOutAndThePath) {
       {file, "--out " + file + ": expected a folder for the output files, got a file"},
       {"/proc/self", "--out: /proc/self/"}};
   for (const std::string command :
-       {"arm", "himmelblau --runs 2 -M 10", "slit --runs 2 --naive-small 5 --naive-large 5",
-        "mcl --runs 1 -M 20", "mcl --init global --runs 1 -M 20 --duration 50",
-        "slam --method ekf --datasets 1", "proposal-gain --runs 1 --duration 10",
-        "reproduce --quick --only arm --no-figures"})
+       {"arm --estimator closed-form", "himmelblau --runs 2 -M 10",
+        "slit --runs 2 --naive-small 5 --naive-large 5", "mcl --runs 1 -M 20",
+        "mcl --init global --runs 1 -M 20 --duration 50", "slam --method ekf --datasets 1",
+        "proposal-gain --runs 1 --duration 10", "reproduce --quick --only arm --no-figures"})
     for (const auto& [out, expected] : outs) {
       const auto r = run_cli(command + " --quiet --out " + out);
       EXPECT_EQ(r.code, 1) << command << " --out " << out << "\n" << r.err;

@@ -31,10 +31,26 @@ TEST(LaserMclCli, ShortRunGivesTheDocumentedJsonForAnyThreadCount) {
   const auto one = run_cli(laser("--json --threads 1 --trajectory " + tum));
   ASSERT_EQ(one.code, 0) << one.err;
   const auto j = nlohmann::json::parse(one.out);
-  for (const char* key :
-       {"experiment", "data", "proposal", "implicit_starts", "particles", "runs", "updates", "map",
-        "odometry_noise", "filter_alphas", "laser", "position_rmse_m", "heading_rmse_rad",
-        "cpu_us_per_update", "ess_fraction", "lost_runs", "per_run", "version", "commit"})
+  for (const char* key : {"experiment",
+                          "data",
+                          "proposal",
+                          "implicit_starts",
+                          "implicit_defensive",
+                          "particles",
+                          "runs",
+                          "updates",
+                          "map",
+                          "odometry_noise",
+                          "filter_alphas",
+                          "laser",
+                          "position_rmse_m",
+                          "heading_rmse_rad",
+                          "cpu_us_per_update",
+                          "ess_fraction",
+                          "lost_runs",
+                          "per_run",
+                          "version",
+                          "commit"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["experiment"], "laser_mcl");
   EXPECT_EQ(j["proposal"], "implicit");
@@ -92,6 +108,9 @@ TEST(LaserMclCli, BadFlagValuesAreUsageErrorsNamingTheFlag) {
       {"--starts 0", 2, "--starts"},
       {"--starts 65", 2, "--starts"},
       {"--starts 1.5", 2, "--starts"},
+      {"--defensive -0.1", 2, "--defensive"},
+      {"--defensive 1", 2, "--defensive"},
+      {"--defensive nan", 2, "--defensive"},
       {"--laser-model sonar", 2, "--laser-model"},
       {"--z-short -1", 2, "--z-short"},
       {"--z-max nan", 2, "--z-max"},
@@ -126,6 +145,7 @@ TEST(LaserMclCli, FilesAndModelsThatDoNotFitExit1NamingThem) {
       {laser("--map " + (dir.path() / "far.yaml").string()), 1, "outside the map"},
       {laser("--aggregation cubed-sum"), 1, "derivatives"},
       {laser("--interpolation nearest"), 1, "nearest"},
+      {laser("--defensive 0.1 --implicit-map random"), 1, "defensive share needs the linear map"},
       {laser("--init global --global-updates 20"), 1, "global start needs more than 20"},
       {laser("--trajectory /proc/no/such/estimate.tum"), 1, "estimate.tum"},
       {laser("--laser-model beam"), 1, "the beam model has none"},
@@ -145,8 +165,9 @@ TEST(LaserMclCli, FilesAndModelsThatDoNotFitExit1NamingThem) {
 }
 
 TEST(LaserMclCli, BeamModelKldAndRecoveryRunAndSayHowInTheJson) {
-  const auto r = run_cli(laser("--method standard --laser-model beam --kld --recovery uniform "
-                               "--json --threads 1"));
+  const auto r =
+      run_cli(laser("--method standard --laser-model beam --kld --recovery uniform "
+                    "--json --threads 1"));
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["laser_model"], "beam");

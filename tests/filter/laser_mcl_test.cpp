@@ -68,7 +68,8 @@ struct Quadrature {
 Quadrature integrate(const robot::LikelihoodFieldModel& model, const robot::PreparedScan& z,
                      const Pose& f, const Vec<3>& sd, int n) {
   Quadrature q;
-  const double h0 = 12.0 * sd(0) / (n - 1), h1 = 12.0 * sd(1) / (n - 1), h2 = 12.0 * sd(2) / (n - 1);
+  const double h0 = 12.0 * sd(0) / (n - 1), h1 = 12.0 * sd(1) / (n - 1),
+               h2 = 12.0 * sd(2) / (n - 1);
   double total = 0.0;
   Vec<3> first = Vec<3>::Zero();
   for (int a = 0; a < n; ++a)
@@ -122,7 +123,8 @@ TEST(LaserMcl, OneUpdateMatchesTheGridIntegralForBothProposals) {
     // Z-hat = mean of the raw weights = exp(increment); SE from the normalised weights:
     // var(w) / Z^2 = M sum wbar^2 - 1.
     const double w2 = 1.0 / r.ess;
-    const double rel_se = std::sqrt((static_cast<double>(m) * w2 - 1.0) / static_cast<double>(m - 1));
+    const double rel_se =
+        std::sqrt((static_cast<double>(m) * w2 - 1.0) / static_cast<double>(m - 1));
     const testing::Estimate z_hat{std::exp(r.log_likelihood_increment),
                                   rel_se * std::exp(r.log_likelihood_increment)};
     // The quadrature must be converged far below the Monte Carlo error it is compared with.
@@ -131,14 +133,19 @@ TEST(LaserMcl, OneUpdateMatchesTheGridIntegralForBothProposals) {
     for (int a = 0; a < 3; ++a) {
       std::vector<double> h(m);
       for (std::size_t j = 0; j < m; ++j) h[j] = pf.particles()[j](a);
-      EXPECT_TRUE(testing::WithinStandardErrors(testing::weighted_moment(pf.weights(), h),
-                                                fine.mean(a)))
+      EXPECT_TRUE(
+          testing::WithinStandardErrors(testing::weighted_moment(pf.weights(), h), fine.mean(a)))
           << proposal.kName << " component " << a;
     }
     return r.ess / static_cast<double>(m);
   };
   check(BootstrapProposal{}, 20000);
   check(ImplicitProposal{}, 2000);
+  // The defensive mixture: a fifth of the samples from the motion prior, weighted by the
+  // mixture's density; still exact (its SE is larger: the prior's samples weigh less).
+  ImplicitProposal defensive;
+  defensive.defensive = 0.2;
+  check(defensive, 4000);
 }
 
 TEST(LaserMcl, ImplicitSamplesCountFarMoreThanBootstrapSamplesForAnInformativeScan) {
@@ -148,8 +155,8 @@ TEST(LaserMcl, ImplicitSamplesCountFarMoreThanBootstrapSamplesForAnInformativeSc
   const Pose x0(2.0, 1.6, 0.3);
   const Vec<3> u(0.3, 0.05, 0.1);
   Rng rng({3, 0, 0, 0});
-  const robot::LaserScan scan = robot::simulate_scan(
-      s.grid, robot::compose(x0, u) + Pose(0.03, -0.02, 0.01), {}, s.sim, rng);
+  const robot::LaserScan scan =
+      robot::simulate_scan(s.grid, robot::compose(x0, u) + Pose(0.03, -0.02, 0.01), {}, s.sim, rng);
   auto ess_fraction = [&](auto proposal) {
     const std::size_t m = 4000;
     auto pf = make_filter(s, proposal, m, 23, 0.0);
@@ -175,7 +182,9 @@ Drive simulate_drive(const LaserSetup& s, int steps) {
   const IncrementModel motion;
   for (int n = 0; n < steps; ++n) {
     // Out along the bottom corridor, then up and back along the top.
-    const Vec<3> cmd = n < 12 ? Vec<3>(0.2, 0.0, 0.0) : n < 20 ? Vec<3>(0.15, 0.0, 0.18) : Vec<3>(0.2, 0.0, 0.0);
+    const Vec<3> cmd = n < 12   ? Vec<3>(0.2, 0.0, 0.0)
+                       : n < 20 ? Vec<3>(0.15, 0.0, 0.18)
+                                : Vec<3>(0.2, 0.0, 0.0);
     Rng rng({99, static_cast<std::uint64_t>(n), 0, 0});
     const Vec<3> w = rng.normal_vector<3>();
     x = robot::compose(x, cmd) + (motion.std.array() * w.array()).matrix();
@@ -265,7 +274,8 @@ TEST(LaserMcl, ImplicitProposalRefusesAModelWithoutDerivatives) {
   MonteCarloLocalization pf(IncrementModel{}, cubed, BootstrapProposal{}, o);
   pf.initialize(Pose(1.2, 1.0, 0.0), Mat3(Vec<3>(0.01, 0.01, 0.001).asDiagonal()));
   Rng rng({1, 0, 0, 0});
-  const StepSummary& r = pf.step(Vec<3>(0.1, 0, 0), robot::simulate_scan(s.grid, Pose(1.3, 1.0, 0), {}, s.sim, rng));
+  const StepSummary& r =
+      pf.step(Vec<3>(0.1, 0, 0), robot::simulate_scan(s.grid, Pose(1.3, 1.0, 0), {}, s.sim, rng));
   EXPECT_TRUE(r.updated);
   EXPECT_EQ(r.failures, 0);
 }

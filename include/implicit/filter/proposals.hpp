@@ -142,6 +142,9 @@ struct ImplicitProposal {
   /// Observation models: Newton starts per particle, the prediction and starts - 1 draws from
   /// the prior; the lowest minimum centres the map (observation_proposals.hpp).
   int starts = 2;
+  /// Observation models, linear map: the share of samples drawn from the motion prior instead
+  /// (a defensive mixture with exact weights, observation_proposals.hpp); 0 = none.
+  double defensive = 0.0;
 
   /// Landmark detections: the range-bearing path (detail::landmark_implicit_step) with
   /// `newton`; any other observation model: observation_proposals.hpp with `scan_newton`.
@@ -151,7 +154,8 @@ struct ImplicitProposal {
     if constexpr (robot::is_landmark_observation_v<Observation>)
       return detail::landmark_implicit_step(ctx, map, newton, previous, rng, next, st);
     else
-      return detail::implicit_step(ctx, map, scan_newton, starts, previous, rng, next, st);
+      return detail::implicit_step(ctx, map, scan_newton, starts, defensive, previous, rng, next,
+                                   st);
   }
 };
 
