@@ -31,6 +31,7 @@
 #include "implicit/core/minimize_options.hpp"
 #include "implicit/core/mixture.hpp"
 #include "implicit/core/newton.hpp"
+#include "implicit/core/output_file.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/random_map.hpp"
 #include "implicit/core/resampling.hpp"

@@ -73,23 +73,6 @@ TEST(OutputFiles, ARenameOntoAFolderFailsNamingTheFlagAndThePathAndLeavesNoTempo
   }
 }
 
-TEST(OutputFiles, AReadOnlyFolderFailsNamingTheFlagAndThePathAndLeavesNoTemporary) {
-  if (::geteuid() == 0) GTEST_SKIP() << "root writes into read-only folders";
-  TempDir dir("outputs_read_only");
-  const auto out = dir.path() / "ro";
-  std::filesystem::create_directories(out);
-  std::filesystem::permissions(
-      out, std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
-  const auto r = run_cli(kOutputsSlit + " --out '" + out.string() + "'");
-  std::filesystem::permissions(out, std::filesystem::perms::owner_all);
-  EXPECT_EQ(r.code, 1) << r.err;
-  EXPECT_TRUE(outputs_contains(r.err, "--out: " + (out / "figure1_unguided.csv").string() +
-                                          ": expected a writable output file, got a folder "
-                                          "where figure1_unguided.csv.tmp"))
-      << r.err;
-  EXPECT_EQ(outputs_temporaries(out), std::vector<std::string>());
-}
-
 TEST(OutputFiles, ASuccessfulRunLeavesNoTemporary) {
   TempDir dir("outputs_success");
   const auto r = run_cli(kOutputsSlit + " --out '" + dir.path().string() + "'");
