@@ -197,7 +197,8 @@ TEST(RobotLogLaser, MapFileIsRelativeToTheLogsFolderAndMustExist) {
   const RobotLog log = read_robot_log(dir / "run.log");
   EXPECT_EQ(map_file(log), dir / "maps/lab.yaml");
   // An absolute name is kept as it is; a log without the record has no map file.
-  EXPECT_EQ(map_file(parse_laser_log("map /data/lab.yaml\n")), std::filesystem::path("/data/lab.yaml"));
+  EXPECT_EQ(map_file(parse_laser_log("map /data/lab.yaml\n")),
+            std::filesystem::path("/data/lab.yaml"));
   EXPECT_EQ(map_file(parse_laser_log("odometry 0 0 0 0\n")), std::filesystem::path());
   std::filesystem::remove_all(dir);
 }
@@ -218,7 +219,8 @@ TEST(RobotLogLaser, FormatIsToldFromTheFirstRecord) {
 // Odometry at scan times: linear between records, heading along the shorter arc (across +-pi
 // too), exact at a record, NaN outside the records' time span.
 TEST(RobotLogLaser, OdometryIsInterpolatedAtScanTimes) {
-  const RobotLog log = parse_laser_log("odometry 0 0 0 0\nodometry 1 1 2 3.0\nodometry 2 1 2 -3.0\n");
+  const RobotLog log =
+      parse_laser_log("odometry 0 0 0 0\nodometry 1 1 2 3.0\nodometry 2 1 2 -3.0\n");
   const std::vector<Pose> p = interpolate_odometry(log, {-0.5, 0.0, 0.25, 1.0, 1.5, 2.0, 2.5});
   ASSERT_EQ(p.size(), 7u);
   EXPECT_TRUE(std::isnan(p[0](0)));
