@@ -10,33 +10,12 @@
 #include "grid_walk.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/robot/scan_simulation.hpp"  // sensor_pose
+#include "log_odds_beam.hpp"
 
 namespace implicit::robot {
 namespace {
 
 constexpr double kMappingUnbounded = std::numeric_limits<double>::infinity();
-
-void require_finite_mount(const LaserMount& mount, const char* who) {
-  require(std::isfinite(mount.x) && std::isfinite(mount.y) && std::isfinite(mount.yaw),
-          "{}: expected a finite laser mount, got ({}, {}, {})", who, mount.x, mount.y, mount.yaw);
-}
-
-// How far beam i of `scan` is used, and whether it ends in a hit (GridMappingOptions).
-struct BeamUse {
-  double length = 0.0;
-  bool hit = false;
-  bool used = false;
-};
-
-BeamUse beam_use(const LaserScan& scan, std::size_t i, double max_range) {
-  const double r = scan.ranges[i];
-  if (r < scan.range_min) return {};  // not a measurement
-  const double limit = max_range > 0 ? max_range : scan.range_max;
-  if (scan.is_hit(i) && r < limit) return {r, true, true};
-  // No return within range_max says nothing beyond it, whatever max_range is.
-  return {std::min(limit, scan.range_max), false, true};
-}
-
 }  // namespace
 
 void GridMappingOptions::validate() const {
@@ -74,8 +53,7 @@ LogOddsGrid::LogOddsGrid(int width, int height, double resolution, const Vec<2>&
 
 void LogOddsGrid::update(int ix, int iy, double delta) {
   const std::size_t k = index(ix, iy);
-  log_odds_[k] =
-      static_cast<float>(std::clamp(double(log_odds_[k]) + delta, -options_.clamp, options_.clamp));
+  log_odds_[k] = detail::add_log_odds(log_odds_[k], delta, options_.clamp);
   observed_[k] = 1;
 }
 
@@ -90,28 +68,17 @@ void LogOddsGrid::trace(const Vec<2>& from, double angle, double length, bool hi
   if (!detail::enter_box(g, d, width_, height_, kMappingUnbounded, &t) || t > end) return;
   int ix = 0, iy = 0;
   detail::entry_cell(g + t * d, width_, height_, &ix, &iy);
-  detail::CellWalk walk(g, d, ix, iy);
-  for (;;) {
-    const int px = walk.ix(), py = walk.iy();
-    if (walk.next() >= end) {  // (px, py) holds the end point
-      update(px, py, hit ? options_.log_odds_hit : options_.log_odds_miss);
-      return;
-    }
-    update(px, py, options_.log_odds_miss);
-    if (!contains(walk.ix(), walk.iy())) return;  // the rest of the beam is outside
-  }
+  detail::trace_beam(
+      g, d, ix, iy, end, hit, options_, [this](int x, int y) { return contains(x, y); },
+      [this](int x, int y, double delta) { update(x, y, delta); });
 }
 
 void LogOddsGrid::integrate(const Pose& robot_pose, const LaserMount& mount,
                             const LaserScan& scan) {
-  scan.validate("LogOddsGrid::integrate");
-  require(robot_pose.allFinite(),
-          "LogOddsGrid::integrate: expected a finite pose, got ({}, {}, {})", robot_pose(0),
-          robot_pose(1), robot_pose(2));
-  require_finite_mount(mount, "LogOddsGrid::integrate");
+  detail::check_scan_input(robot_pose, mount, scan, "LogOddsGrid::integrate");
   const Pose s = sensor_pose(robot_pose, mount);
   for (std::size_t i = 0; i < scan.size(); ++i) {
-    const BeamUse use = beam_use(scan, i, options_.max_range);
+    const detail::BeamUse use = detail::beam_use(scan, i, options_.max_range);
     if (use.used) trace(s.head<2>(), s(2) + scan.bearing(i), use.length, use.hit);
   }
 }
@@ -120,9 +87,7 @@ OccupancyGrid LogOddsGrid::to_occupancy() const {
   OccupancyGrid out(width_, height_, resolution_, origin_, OccupancyGrid::kUnknown);
   for (int iy = 0; iy < height_; ++iy)
     for (int ix = 0; ix < width_; ++ix) {
-      if (!observed(ix, iy)) continue;
-      const double p = 1.0 - 1.0 / (1.0 + std::exp(double(log_odds(ix, iy))));
-      out.at(ix, iy) = static_cast<std::int8_t>(std::lround(100.0 * p));
+      if (observed(ix, iy)) out.at(ix, iy) = detail::occupancy_value(log_odds(ix, iy));
     }
   return out;
 }
@@ -134,7 +99,7 @@ OccupancyGrid build_map(std::span<const Pose> robot_poses, std::span<const Laser
           "build_map: expected one robot pose per scan, got {} poses and {} scans",
           robot_poses.size(), scans.size());
   require(!scans.empty(), "build_map: expected at least one scan, got none");
-  require_finite_mount(mount, "build_map");
+  detail::check_finite_mount(mount, "build_map");
 
   // The extent: every sensor position and every end point the mapper will reach.
   Vec<2> lo = Vec<2>::Constant(kMappingUnbounded), hi = -lo;
@@ -147,7 +112,7 @@ OccupancyGrid build_map(std::span<const Pose> robot_poses, std::span<const Laser
     lo = lo.cwiseMin(s.head<2>());
     hi = hi.cwiseMax(s.head<2>());
     for (std::size_t i = 0; i < scans[k].size(); ++i) {
-      const BeamUse use = beam_use(scans[k], i, options.max_range);
+      const detail::BeamUse use = detail::beam_use(scans[k], i, options.max_range);
       if (!use.used) continue;
       const double a = s(2) + scans[k].bearing(i);
       const Vec<2> e = s.head<2>() + use.length * Vec<2>(std::cos(a), std::sin(a));
