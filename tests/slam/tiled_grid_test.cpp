@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "implicit/core/error.hpp"
@@ -206,6 +207,31 @@ TEST(TiledGrid, ACopySharesTheTilesItDoesNotWrite) {
   // Once the parent is gone, every tile of the child is its own.
   { const Grid gone = std::move(parent); }
   EXPECT_EQ(child.unique_tile_count(), tiles);
+}
+
+TEST(TiledGrid, CopiesWrittenOnOtherThreadsLeaveEachOtherAlone) {
+  Grid parent;
+  Rng rng({.seed = 13, .purpose = purpose::kData});
+  const Pose at(10.0, 10.0, 0.0);
+  const LaserScan first = tiled_grid_random_scan(rng);
+  parent.integrate(at, {}, first);
+  // Four children over the same tiles, each given its own scan on its own thread.
+  std::vector<LaserScan> scans;
+  for (int j = 0; j < 4; ++j) scans.push_back(tiled_grid_random_scan(rng));
+  std::vector<Grid> children(4, parent);
+  {
+    std::vector<std::jthread> threads;
+    for (std::size_t j = 0; j < 4; ++j)
+      threads.emplace_back([&, j] { children[j].integrate(at, {}, scans[j]); });
+  }
+  for (std::size_t j = 0; j < 4; ++j) {
+    Grid replay = parent;
+    replay.integrate(at, {}, scans[j]);
+    expect_tiled_grids_equal(children[j], replay, 100, 100, 300, 300);
+  }
+  Grid alone;
+  alone.integrate(at, {}, first);
+  expect_tiled_grids_equal(parent, alone, 100, 100, 300, 300);  // the parent is unchanged
 }
 
 TEST(TiledGrid, MapUpdateGateFollowsGmappingThresholds) {
