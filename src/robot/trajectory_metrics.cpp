@@ -33,7 +33,7 @@ void trajectory_metrics_push_error(TrajectoryErrors& out, const Pose3& e, std::s
   out.second.push_back(j);
 }
 
-void trajectory_metrics_check_association(const AssociationOptions& o) {
+void trajectory_metrics_check_association(const TimeAssociationOptions& o) {
   require(std::isfinite(o.max_diff) && o.max_diff >= 0,
           "trajectory association: expected a finite max_diff >= 0 [s], got {}", o.max_diff);
   require(std::isfinite(o.offset), "trajectory association: expected a finite offset [s], got {}",
@@ -42,7 +42,7 @@ void trajectory_metrics_check_association(const AssociationOptions& o) {
 
 /// Index of the estimated pose nearest in time (after the offset) to t within max_diff, or -1.
 std::ptrdiff_t trajectory_metrics_lookup(const Trajectory& est, double t,
-                                         const AssociationOptions& o) {
+                                         const TimeAssociationOptions& o) {
   const double target = t - o.offset;
   const auto it = std::lower_bound(est.times.begin(), est.times.end(), target);
   std::ptrdiff_t best = -1;
@@ -102,7 +102,7 @@ void trajectory_metrics_umeyama(const std::vector<Vec<D>>& x, const std::vector<
 }  // namespace
 
 PosePairs associate(const Trajectory& ref, const Trajectory& est,
-                    const AssociationOptions& options) {
+                    const TimeAssociationOptions& options) {
   trajectory_metrics_check_association(options);
   ref.validate("reference trajectory");
   est.validate("estimated trajectory");
@@ -347,7 +347,7 @@ ErrorStatistics error_statistics(const std::vector<double>& values,
 }
 
 RelationErrors relation_errors(const Trajectory& est, const std::vector<Relation>& relations,
-                               const AssociationOptions& options) {
+                               const TimeAssociationOptions& options) {
   trajectory_metrics_check_association(options);
   est.validate("estimated trajectory");
   require(!est.empty(), "relation metric: expected an estimated trajectory, got no poses");

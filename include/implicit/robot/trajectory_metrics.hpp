@@ -27,7 +27,7 @@
 
 namespace implicit::robot {
 
-struct AssociationOptions {
+struct TimeAssociationOptions {
   double max_diff = 0.01;  ///< [s] largest |t_ref - (t_est + offset)| of a pair
   double offset = 0.0;     ///< [s] added to the estimate's times
 };
@@ -46,7 +46,7 @@ struct PosePairs {
 /// option is not finite or max_diff < 0, or when no pair is found (naming both trajectories'
 /// time ranges).
 PosePairs associate(const Trajectory& ref, const Trajectory& est,
-                    const AssociationOptions& options = {});
+                    const TimeAssociationOptions& options = {});
 
 enum class AlignmentKind { kNone, kSe2, kSe3, kSim3 };
 const char* to_string(AlignmentKind kind);
@@ -126,6 +126,6 @@ struct RelationErrors {
 /// Estimated poses are looked up by time as in associate (nearest within max_diff, after the
 /// offset). Throws InvalidArgument when no relation finds both of its poses.
 RelationErrors relation_errors(const Trajectory& est, const std::vector<Relation>& relations,
-                               const AssociationOptions& options = {});
+                               const TimeAssociationOptions& options = {});
 
 }  // namespace implicit::robot
