@@ -75,6 +75,11 @@ TEST(TiledGrid, OneScanMarksTheCellsWorkedOutByHand) {
   // Cells -2 and -1 are in tile -1, the others in tile 0.
   EXPECT_EQ(grid.tile_count(), 2u);
   EXPECT_EQ(grid.world_to_cell(Vec<2>(-0.01, 31.99)), Eigen::Vector2i(-1, 31));
+  const Eigen::Vector2i end = grid.world_to_cell(Vec<2>(1.5 - 3.0, 0.5));  // the west beam's end
+  EXPECT_EQ(end, Eigen::Vector2i(-2, 0));
+  EXPECT_EQ(grid.log_odds(end), grid.log_odds(-2, 0));
+  EXPECT_EQ(grid.probability(end), grid.probability(-2, 0));
+  EXPECT_TRUE(grid.observed(end));
 
   // The dense map: x -2 .. 5, y 0 .. 2, corner at (-2, 0).
   const robot::OccupancyGrid map = grid.to_occupancy_grid();

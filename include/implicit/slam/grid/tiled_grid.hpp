@@ -87,6 +87,10 @@ class TiledLogOddsGrid {
   /// 1 - 1 / (1 + exp(log-odds)): 1/2 for a cell never observed.
   double probability(int ix, int iy) const;
   bool observed(int ix, int iy) const;
+  /// The same for a cell given as world_to_cell returns it.
+  float log_odds(const Eigen::Vector2i& cell) const { return log_odds(cell.x(), cell.y()); }
+  double probability(const Eigen::Vector2i& cell) const { return probability(cell.x(), cell.y()); }
+  bool observed(const Eigen::Vector2i& cell) const { return observed(cell.x(), cell.y()); }
 
   /// Adds one scan taken at robot_pose (LogOddsGrid::integrate's model, with no edge: tiles
   /// are created where the beams go). All or nothing: throws InvalidArgument, before any cell
