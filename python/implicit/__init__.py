@@ -12,6 +12,7 @@ Robotics (spec §3): implicit.models (Ute, Unicycle, RangeBearing), implicit.dat
 victoria_park(), read_log(), simulate(), steps()), ParticleFilter, implicit.slam (Filter, run),
 implicit.mcl.run; implicit.laser (occupancy grids, CARMEN logs, the likelihood field, the
 odometry model, a laser ParticleFilter and run). Control (spec §2): implicit.control.
+Trajectory scoring (APE, RPE as evo computes them): implicit.eval.
 
 Errors are raised as implicit.InvalidArgument (a ValueError) with the library's message.
 
@@ -28,7 +29,7 @@ _paths.configure()
 from ._core import SampleResult, ess, log_sum_exp, resample, sample  # noqa: E402
 from ._implicit import InvalidArgument, ParseError, __version__  # noqa: E402
 from ._implicit import ParticleFilter  # noqa: E402
-from . import control, data, laser, mcl, models, slam  # noqa: E402
+from . import control, data, eval, laser, mcl, models, slam  # noqa: E402
 
 __all__ = [
     "InvalidArgument",
@@ -39,6 +40,7 @@ __all__ = [
     "control",
     "data",
     "ess",
+    "eval",
     "laser",
     "log_sum_exp",
     "mcl",

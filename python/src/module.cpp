@@ -15,6 +15,7 @@ void init_slam(py::module_& m);
 void init_runs(py::module_& m);
 void init_control(py::module_& m);
 void init_laser(py::module_& m);
+void init_eval(py::module_& m);
 }  // namespace implicit::python
 
 PYBIND11_MODULE(_implicit, m) {
@@ -36,5 +37,7 @@ PYBIND11_MODULE(_implicit, m) {
   ip::init_control(control);
   auto laser = m.def_submodule("laser", "Laser localization on occupancy grids.");
   ip::init_laser(laser);
+  auto eval = m.def_submodule("eval", "Trajectory scoring: APE and RPE.");
+  ip::init_eval(eval);
   m.attr("__version__") = implicit::version();
 }

@@ -82,6 +82,11 @@ void trajectory_metrics_umeyama(const std::vector<Vec<D>>& x, const std::vector<
   var_x /= n;
   var_y /= n;
   sigma /= n;
+  // Coordinates near the largest double overflow in the squares; no alignment is meaningful then.
+  require(std::isfinite(var_x) && std::isfinite(var_y) && sigma.allFinite(),
+          "alignment: expected positions whose spread squared is finite, got a spread of {} m "
+          "(estimate) and {} m (reference)",
+          std::sqrt(var_x), std::sqrt(var_y));
   require(var_x > 0, "alignment: expected estimated positions that are not all equal, got {} equal",
           x.size());
   Eigen::JacobiSVD<Mat<D>> svd(sigma, Eigen::ComputeFullU | Eigen::ComputeFullV);

@@ -242,6 +242,10 @@ TEST(TrajectoryAlignment, MirrorImageGivesARotationAndDegenerateSetsAreRefused) 
   EXPECT_THROW(align_umeyama(line, same, AlignmentKind::kSe3), InvalidArgument);  // sizes
   EXPECT_THROW(align_umeyama({line[0], line[1]}, {line[0], line[1]}, AlignmentKind::kSim3),
                InvalidArgument);
+  // Squares of 1e300 overflow: refused, not aligned with NaN.
+  const std::vector<Vec<3>> huge{Vec<3>(1e300, 0, 0), Vec<3>(-1e300, 1e300, 0),
+                                 Vec<3>(0, 0, 1e300)};
+  EXPECT_THROW(align_umeyama(huge, huge, AlignmentKind::kSe3), InvalidArgument);
   EXPECT_THROW(alignment_kind_from_string("se4"), InvalidArgument);
 }
 
