@@ -15,6 +15,7 @@
 #include "context.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/output_file.hpp"
+#include "implicit/core/parallel.hpp"
 #include "implicit/robot/trajectory.hpp"
 #include "implicit/robot/trajectory_metrics.hpp"
 #include "registry.hpp"
@@ -107,6 +108,7 @@ void run_eval(const EvalCommand& c) {
   if (c.delta_unit == "frames" && c.delta != std::floor(c.delta))
     throw CLI::ValidationError(
         "--delta", fmt::format("expected an integer number of frames, got {}", c.delta));
+  const ThreadLimit threads(c.ctx.threads);  // the bootstrap resamples run in parallel
   const robot::TimeAssociationOptions assoc{.max_diff = c.max_diff, .offset = c.offset};
   const robot::StatisticsOptions stats{
       .seed = c.ctx.seed, .resamples = kEvalResamples, .level = kEvalLevel};

@@ -10,6 +10,7 @@
 #include <Eigen/SVD>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/parallel.hpp"
 #include "implicit/core/rng.hpp"
 
 namespace implicit::robot {
@@ -330,7 +331,8 @@ ErrorStatistics error_statistics(const std::vector<double>& values,
   }
   std::vector<double> means(static_cast<std::size_t>(options.resamples));
   std::vector<double> rmses(means.size());
-  for (std::size_t b = 0; b < means.size(); ++b) {
+  // Each resample has its own stream and slot: the same intervals for any thread count.
+  parallel_for(means.size(), [&](std::size_t b) {
     Rng rng({.seed = options.seed, .step = b, .index = 0, .purpose = purpose::kUser + 40});
     double bs = 0, bsq = 0;
     for (std::size_t k = 0; k < values.size(); ++k) {
@@ -340,7 +342,7 @@ ErrorStatistics error_statistics(const std::vector<double>& values,
     }
     means[b] = bs / n;
     rmses[b] = std::sqrt(bsq / n);
-  }
+  });
   std::sort(means.begin(), means.end());
   std::sort(rmses.begin(), rmses.end());
   const double tail = 0.5 * (1.0 - options.level);
