@@ -76,8 +76,10 @@ TEST(EvalCli, ApeByHandAndAlignmentStatedInJson) {
   EXPECT_EQ(j["rpe"]["pairs"], 11);
   EXPECT_NEAR(j["rpe"]["translation_m"]["max"].get<double>(), 0.3, 1e-12);
   EXPECT_NEAR(j["rpe"]["translation_m"]["mean"].get<double>(), 0.6 / 11, 1e-12);
-  // Same seed, same intervals; the table names every row.
-  EXPECT_EQ(run_cli("eval --ref " + f.ref + " --est " + f.est + " --json").out, r.out);
+  // Same seed, same intervals, for any thread count; the table names every row.
+  EXPECT_EQ(run_cli("eval --ref " + f.ref + " --est " + f.est + " --json --threads 1").out, r.out);
+  EXPECT_EQ(run_cli("eval --ref " + f.ref + " --est " + f.est + " --json --threads 2").out, r.out);
+  EXPECT_NE(run_cli("eval --ref " + f.ref + " --est " + f.est + " --json --seed 2").out, r.out);
   const auto table = run_cli("eval --ref " + f.ref + " --est " + f.est);
   ASSERT_EQ(table.code, 0) << table.err;
   for (const char* row : {"APE translation [m]", "APE rotation [deg]", "RPE full |E - I|",
