@@ -158,6 +158,11 @@ void setup_mcl(CLI::App& sub) {
       ->check(in_range(0.0, 90.0));
   sub.add_flag("--no-clutter{false}", cmd->settings.clutter,
                "Dropped detections contribute nothing (instead of the clutter density p0)");
+  sub.add_option("--label-gate", cmd->settings.label_gate,
+                 "Labelled detections whose d^2 against the predicted pose exceeds this are left "
+                 "out of the step and counted (labelled_gated); 0 trusts every label (default: "
+                 "the 2-dof chi-square quantile at 1 - 1e-6)")
+      ->check(in_range(0.0, 1e6));
   add_global_options(sub, cmd->settings);
   add_laser_options(sub, cmd->laser);
   sub.add_flag("--allow-empty", cmd->allow_empty,

@@ -268,13 +268,14 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   filter::FilterOptions options;
   options.particles = static_cast<std::size_t>(s.particles);
   options.association.clutter = s.clutter;
+  options.association.label_gate = s.label_gate;
   filter::ImplicitProposal implicit_proposal;
   implicit_proposal.map =
       s.map == "random" ? filter::ImplicitMap::kRandom : filter::ImplicitMap::kLinear;
 
   std::vector<double> wall;
   std::vector<double> err, rmse, hrmse, ess, cpu, used, dropped, newton, max_err, resamplings,
-      min_loglik;
+      min_loglik, gated;
   int lost = 0, fallbacks = 0, failures = 0;
   Progress bar(fmt::format("mcl {} M={}", s.method, s.particles), static_cast<std::size_t>(s.runs),
                ctx.show_progress());
@@ -288,11 +289,12 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   };
   const std::string settings = fmt::format(
       "seed={} method={} M={} config={} p={:a} q={:a} map={} clutter={} sigma2={} truth={} "
-      "gps_std={:a} reference_M={} data={} model={} control_sd={:a} state_sd={:a} range_sd={:a} "
+      "gps_std={:a} reference_M={} data={} model={} control_sd={:a} state_sd={:a} label_gate={:a} "
+      "range_sd={:a} "
       "bearing_sd={:a}",
       ctx.seed, s.method, s.particles, s.config, p, s.q, s.map, s.clutter, s.sigma2, s.truth,
       s.gps_std, s.reference_particles, s.data_dir, setup.model_name, fmt::join(s.control_sd, ","),
-      fmt::join(s.state_sd, ","), s.range_sd, s.bearing_sd_deg);
+      fmt::join(s.state_sd, ","), s.label_gate, s.range_sd, s.bearing_sd_deg);
   const auto records =
       distribute_runs(ctx, "mcl", settings, static_cast<std::size_t>(s.runs), [&](std::size_t r) {
         const LocalizationRun run = run_number(r);
@@ -313,7 +315,8 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
                          static_cast<double>(run.resamplings),
                          m.min_log_likelihood_increment,
                          static_cast<double>(m.fallbacks),
-                         static_cast<double>(m.failures)};
+                         static_cast<double>(m.failures),
+                         static_cast<double>(m.gated)};
       });
   bar.finish();
   for (const auto& v : records) {
@@ -332,7 +335,14 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
     lost += v.at(9) > 5.0 ? 1 : 0;
     fallbacks += static_cast<int>(v.at(12));
     failures += static_cast<int>(v.at(13));
+    gated.push_back(v.at(14));
   }
+  if (const double g = std::accumulate(gated.begin(), gated.end(), 0.0); g > 0)
+    fmt::print(stderr,
+               "implicit mcl: warning: {} labelled detections ({} per run) were left out: the "
+               "predicted pose could not produce them (d^2 > --label-gate {:g}); --label-gate 0 "
+               "keeps every label (\"labelled_gated\" in the JSON counts them)\n",
+               g, g / static_cast<double>(gated.size()), s.label_gate);
   // Only rank 0 writes (parallel_runs.hpp), and only the file needs the whole run.
   if (!ctx.out_dir.empty() && rank_index() == 0) {
     // The run with the median err% (the lower median for an even count): a typical run, not the
@@ -407,6 +417,8 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   j["detections_total"] = problem.detections_total;
   j["detections_used"] = mean_of(used);
   j["detections_dropped"] = mean_of(dropped);
+  j["label_gate"] = s.label_gate;
+  j["labelled_gated"] = mean_of(gated);  // per run: labelled detections left out by the gate
   j["scans_with_detections"] = problem.schedule.scans_with_observations;
   j["scans_skipped"] = problem.schedule.scans_skipped;
   j["detections_skipped"] = problem.schedule.observations_skipped;

@@ -123,6 +123,7 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
   filter::FilterOptions options;
   options.particles = static_cast<std::size_t>(s.particles);
   options.association.clutter = s.clutter;
+  options.association.label_gate = s.label_gate;
   options.kld.enabled = s.kld;
   options.kld.kld_err = s.kld_err;
   options.kld.kld_z = s.kld_z;
@@ -153,12 +154,12 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
       "global seed={} method={} M={} init={} span={:a} duration={:a} kidnap_at={:a} skip={:a} "
       "recovery={} slow={:a} fast={:a} eps={:a} kld={} err={:a} z={:a} min={} max={} "
       "cover={:a}/{} map={} clutter={} data={} config={} p={:a} q={:a} control_sd={:a} "
-      "state_sd={:a} sigma2={} range_sd={:a} bearing_sd={:a}",
+      "state_sd={:a} sigma2={} range_sd={:a} bearing_sd={:a} label_gate={:a}",
       ctx.seed, s.method, s.particles, s.init, s.start_span, s.duration, s.kidnap_at, s.kidnap_skip,
       s.recovery, s.recovery_alpha_slow, s.recovery_alpha_fast, s.kidnap_probability, s.kld,
       s.kld_err, s.kld_z, s.min_particles, s.max_particles, s.cover_spacing, s.cover_headings,
       s.map, s.clutter, s.data_dir, s.config, s.p, s.q, fmt::join(s.control_sd, ","),
-      fmt::join(s.state_sd, ","), s.sigma2, s.range_sd, s.bearing_sd_deg);
+      fmt::join(s.state_sd, ","), s.sigma2, s.range_sd, s.bearing_sd_deg, s.label_gate);
   Progress bar(fmt::format("mcl {} {} M={}", s.init == "global" ? "global" : "kidnap", s.method,
                            s.particles),
                runs, ctx.show_progress());

@@ -285,7 +285,6 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     }
   const auto k_runs = static_cast<std::size_t>(s.datasets);
   std::vector<RunSummary> runs(k_runs);
-  Progress bar(fmt::format("SLAM {} M={}", s.method, particles), k_runs, ctx.show_progress());
   const double cpu0 = cpu_seconds();
   // Data set i and its filter run depend only on i (seed + i), so the runs can be anywhere.
   const std::string settings = fmt::format(
@@ -304,6 +303,13 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     cfg.motion = base.motion;
     return slam::generate_synthetic(scenario, cfg, ctx.seed + i);
   };
+  // Progress counts steps, not runs: a single long run (Victoria Park, about a minute) moves too.
+  std::size_t total_steps = 0;
+  for (std::size_t i = 0; i < k_runs; ++i)
+    total_steps += logs.empty() ? 0 : logs[i % logs.size()].steps();
+  if (logs.empty()) total_steps = k_runs * dataset(0).steps();  // one scenario: equal lengths
+  Progress bar(fmt::format("SLAM {} M={} steps", s.method, particles), total_steps,
+               ctx.show_progress());
   const auto records = distribute_runs(ctx, "slam", settings, k_runs, [&](std::size_t i) {
     const slam::SlamDataset data = dataset(i);
     slam::SlamOptions opt = base;
@@ -318,10 +324,8 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
       p.dt = data.vehicle.dt;
       opt.model = robot::UnicycleModel(unicycle_params(robot::RobotLog{}, noise, p));
     }
-    const slam::SlamRun run = slam::run_filter(data, opt);
-    RunRecord r = to_record(data, run, slam::evaluate(data, run), consistent, i == 0);
-    bar.tick();
-    return r;
+    const slam::SlamRun run = slam::run_filter(data, opt, false, [&bar] { bar.tick(); });
+    return to_record(data, run, slam::evaluate(data, run), consistent, i == 0);
   });
   for (std::size_t i = 0; i < k_runs; ++i) runs[i] = from_record(records[i]);
   bar.finish();

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "context.hpp"
+#include "implicit/robot/landmark_observation.hpp"
 
 namespace implicit::app {
 
@@ -59,6 +60,8 @@ struct MclSettings {
   double q = -1.0;                  ///< override Q position entries q1 = q2 [m]; < 0: 0.1
   std::string map = "linear";       ///< implicit proposal: "linear" or "random" map
   bool clutter = true;              ///< dropped detections contribute the clutter density p0
+  /// Labelled detections: chi-square gate on d^2 against the prediction; 0 = trust every label.
+  double label_gate = robot::kLabelGateDefault;
   std::string sigma2 = "variance";  ///< reading of Table 7's Sigma2: "variance" or "std"
   std::string truth = "gps";        ///< ground truth: "gps" or "reference" (GPS-aided MCL run)
   double gps_std = 0.5;             ///< [m] GPS std assumed by the reference run

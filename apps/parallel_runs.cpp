@@ -35,6 +35,7 @@ fs::path g_resume_root;
 struct Outcome {
   bool done = false;
   bool failed = false;
+  bool invalid = false;  ///< failed with InvalidArgument (the data or settings, not the machine)
   RunRecord record;
   std::string error;
 };
@@ -54,7 +55,7 @@ T get(const std::string& in, std::size_t& at) {
 
 void pack(std::string& out, std::size_t index, const Outcome& o) {
   put<std::uint64_t>(out, index);
-  put<std::uint8_t>(out, o.failed ? 1 : 0);
+  put<std::uint8_t>(out, o.failed ? (o.invalid ? 2 : 1) : 0);
   if (o.failed) {
     put<std::uint64_t>(out, o.error.size());
     out += o.error;
@@ -68,11 +69,13 @@ void unpack(const std::string& in, std::vector<Outcome>& outcomes) {
   std::size_t at = 0;
   while (at < in.size()) {
     const auto index = get<std::uint64_t>(in, at);
-    const bool failed = get<std::uint8_t>(in, at) != 0;
+    const auto state = get<std::uint8_t>(in, at);
+    const bool failed = state != 0;
     const auto count = get<std::uint64_t>(in, at);
     Outcome& o = outcomes.at(index);
     o.done = true;
     o.failed = failed;
+    o.invalid = state == 2;
     if (failed) {
       o.error = in.substr(at, count);
       at += count;
@@ -138,10 +141,22 @@ bool dynamic_schedule() {
       fmt::format("IMPLICIT_SCHEDULE: expected static or dynamic, got '{}'", choice));
 }
 
-// IMPLICIT_FAIL_RUN=i makes run i throw: the failure path, rehearsed by tests/mpi/compare.py.
+// IMPLICIT_FAIL_RUN=i makes run i throw: the failure path, rehearsed by tests/mpi/compare.py;
+// IMPLICIT_FAIL_RUN=-2 makes every run refuse its input (InvalidArgument), as a model that does
+// not match the data would (tests/apps/bad_input_cli_test.cpp).
 long failing_run() {
   const char* s = std::getenv("IMPLICIT_FAIL_RUN");
   return s == nullptr ? -1 : std::strtol(s, nullptr, 10);
+}
+
+// The message without run_one's " (rank k)" suffix.
+std::string without_rank(const std::string& error) {
+  const std::size_t at = error.rfind(" (rank ");
+  if (at == std::string::npos || error.back() != ')') return error;
+  const std::string digits = error.substr(at + 7, error.size() - at - 8);
+  const bool number = !digits.empty() && std::all_of(digits.begin(), digits.end(),
+                                                     [](char c) { return c >= '0' && c <= '9'; });
+  return number ? error.substr(0, at) : error;
 }
 
 // Called on TBB's threads: no MPI here (the ranks are started with MPI_THREAD_FUNNELED).
@@ -152,8 +167,12 @@ void run_one(std::size_t i, const std::function<RunRecord(std::size_t)>& run,
   try {
     if (static_cast<long>(i) == failing_run())
       throw std::runtime_error("failure requested by IMPLICIT_FAIL_RUN");
+    if (failing_run() == -2) throw InvalidArgument("refusal requested by IMPLICIT_FAIL_RUN=-2");
     o.record = run(i);
     if (!folder.empty()) write_record(folder, key, i, o.record);
+  } catch (const InvalidArgument& e) {
+    o.failed = o.invalid = true;
+    o.error = e.what();
   } catch (const std::exception& e) {
     o.failed = true;
     o.error = e.what();
@@ -245,6 +264,15 @@ std::vector<RunRecord> distribute_runs(const RunContext& ctx, const std::string&
     } else {
       records[i] = std::move(outcomes[i].record);
     }
+  }
+  // Every run refused the same input (a model that does not match the data, a setting the
+  // filter checks): that message, as the error it was, instead of "n of n runs failed".
+  if (failed == n && n > 0) {
+    const std::string first = without_rank(outcomes[0].error);
+    const bool same = std::all_of(outcomes.begin(), outcomes.end(), [&](const Outcome& o) {
+      return o.invalid && without_rank(o.error) == first;
+    });
+    if (same) throw InvalidArgument(first);
   }
   if (failed > 0)
     throw std::runtime_error(fmt::format(

@@ -147,7 +147,8 @@ void memory(benchmark::State& state) {
     for (std::size_t k = 0; k < scans; ++k) {
       for (std::size_t j = 0; j < m; ++j) {
         Rng rng({.seed = 3, .step = k, .index = j, .purpose = purpose::kData});
-        const Pose noise(0.05 * rng.normal(), 0.05 * rng.normal(), 0.02 * rng.normal());
+        const Vec<3> xi = rng.normal_vector<3>();  // one call: argument order is unspecified
+        const Pose noise(0.05 * xi(0), 0.05 * xi(1), 0.02 * xi(2));
         particles[j].integrate(s.poses[k] + noise, {}, s.scans[k]);
       }
       one.integrate(s.poses[k], {}, s.scans[k]);

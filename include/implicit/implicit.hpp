@@ -79,8 +79,6 @@
 #include "implicit/robot/simulate.hpp"
 #include "implicit/robot/trajectory.hpp"
 #include "implicit/robot/trajectory_metrics.hpp"
-#include "implicit/robot/trajectory.hpp"
-#include "implicit/robot/trajectory_metrics.hpp"
 #include "implicit/robot/types.hpp"
 #include "implicit/robot/unicycle_model.hpp"
 #include "implicit/robot/ute_model.hpp"

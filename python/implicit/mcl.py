@@ -17,7 +17,8 @@ def run(method="implicit", particles=100, runs=20, seed=1, data=None, config="A"
         bearing_sd=0.0, out=None, threads=0, init="known", start_span=60.0, duration=0.0,
         kidnap_at=None, kidnap_skip=10.0, recovery="auto", recovery_alpha_slow=0.001,
         recovery_alpha_fast=0.1, kidnap_probability=1e-3, kld=False, kld_err=0.01, kld_z=0.99,
-        min_particles=100, max_particles=5000, cover_spacing=2.0, cover_headings=8):
+        min_particles=100, max_particles=5000, cover_spacing=2.0, cover_headings=8,
+        label_gate=27.631021115928547):
     """Runs `implicit mcl` with these settings and returns its JSON result as a dict.
 
     Each argument is the CLI flag of the same name (docs/cli.md): method "standard"
@@ -29,7 +30,8 @@ def run(method="implicit", particles=100, runs=20, seed=1, data=None, config="A"
     kidnap_at [s] (None: no kidnapping) and kidnap_skip [s], recovery "auto", "none", "uniform"
     or "mixture" with recovery_alpha_slow, recovery_alpha_fast and kidnap_probability, kld with
     kld_err, kld_z, min_particles and max_particles, and the multi-start's cover_spacing [m] and
-    cover_headings.
+    cover_headings. label_gate: labelled detections whose d^2 against the predicted pose exceeds
+    it are left out and counted ("labelled_gated"); 0 trusts every label.
 
     Returns:
         dict with the keys of `implicit mcl --json` (rmse_m [m], error_percent_mean,
@@ -53,5 +55,5 @@ def run(method="implicit", particles=100, runs=20, seed=1, data=None, config="A"
         recovery=recovery, recovery_alpha_slow=recovery_alpha_slow,
         recovery_alpha_fast=recovery_alpha_fast, kidnap_probability=kidnap_probability, kld=kld,
         kld_err=kld_err, kld_z=kld_z, min_particles=min_particles, max_particles=max_particles,
-        cover_spacing=cover_spacing, cover_headings=cover_headings)
+        cover_spacing=cover_spacing, cover_headings=cover_headings, label_gate=label_gate)
     return _runs.call(_implicit._run_mcl, settings, seed, out, threads)

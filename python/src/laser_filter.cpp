@@ -332,7 +332,7 @@ void read_laser_model(const RunArgs& arg, bool implicit, experiments::LaserMclSe
 /// none for laser runs).
 void read_kld_recovery(const RunArgs& arg, experiments::LaserMclSettings& s) {
   s.kld.enabled = bool_arg(arg("kld"), "kld");
-  s.kld.kld_err = number_arg(arg("kld_err"), "kld_err", 0.0, 1.0, true);
+  s.kld.kld_err = number_arg(arg("kld_err"), "kld_err", 1e-6, 1.0);  // --kld-err's range
   s.kld.kld_z = number_arg(arg("kld_z"), "kld_z", 0.0, 10.0);
   const py::object recovery = arg("recovery");
   require(!(py::isinstance<py::str>(recovery) && recovery.cast<std::string>() == "mixture"),

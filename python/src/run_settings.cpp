@@ -29,6 +29,7 @@ constexpr RunSettingRange kMclRanges[] = {
     {"state_sd", "--state-sd", 1e-9, 100.0, false, 3},
     {"range_sd", "--range-sd", 0.0, 100.0, false},
     {"bearing_sd", "--bearing-sd", 0.0, 90.0, false},
+    {"label_gate", "--label-gate", 0.0, 1e6, false},
     {"start_span", "--start-span", 0.0, 1e6, false},
     {"duration", "--duration", 0.0, 1e6, false},
     {"kidnap_at", "--kidnap-at", 0.0, 1e6, false},
@@ -148,6 +149,7 @@ app::MclSettings mcl_settings(const py::dict& kw) {
   s.q = k.number_or("q", -1.0);
   s.map = k.text("map");
   s.clutter = k.flag("clutter");
+  s.label_gate = k.number("label_gate");
   s.sigma2 = k.text("sigma2");
   s.truth = k.text("truth");
   s.gps_std = k.number("gps_std");

@@ -70,6 +70,7 @@ LocalizationMetrics localization_metrics(const LocalizationRun& run, const robot
     const StepSummary& s = run.steps[k];
     m.detections_used += s.detections_used;
     m.detections_dropped += s.detections_dropped;
+    m.gated += s.gated;
     m.fallbacks += s.fallbacks;
     m.failures += s.failures;
     if (s.updated) {

@@ -40,7 +40,8 @@ RigidTransform2 align_rigid(const std::vector<Vec<2>>& from, const std::vector<V
   return t;
 }
 
-SlamRun run_filter(const SlamDataset& data, const SlamOptions& options, bool known_map) {
+SlamRun run_filter(const SlamDataset& data, const SlamOptions& options, bool known_map,
+                   const std::function<void()>& on_step) {
   data.validate();
   SlamRun run;
   auto filter = make_slam_filter(options, data.initial_pose);
@@ -56,6 +57,7 @@ SlamRun run_filter(const SlamDataset& data, const SlamOptions& options, bool kno
     const PoseEstimate e = filter->pose();
     run.path.push_back(e.mean);
     run.path_cov.push_back(e.cov);
+    if (on_step) on_step();
   }
   run.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   run.map = filter->map();

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 #include <variant>
@@ -83,7 +84,7 @@ class EkfSlamFilter final : public SlamFilter {
     for (std::size_t k = 0; k < landmarks.size(); ++k) {
       core_.augment(landmarks[k], Mat23::Zero(), Mat<2>::Zero());
       id_of_slot_.push_back(static_cast<int>(k));
-      slot_of_id_.push_back(static_cast<int>(k));
+      slot_of_id_[static_cast<int>(k)] = static_cast<int>(k);
     }
   }
 
@@ -106,8 +107,8 @@ class EkfSlamFilter final : public SlamFilter {
       if (opt_.association == Association::kKnown) {
         require(o.landmark >= 0, "SLAM step {}: known association needs a landmark id, got {}", n,
                 o.landmark);
-        const auto id = static_cast<std::size_t>(o.landmark);
-        if (id < slot_of_id_.size()) slot = slot_of_id_[id];
+        if (const auto it = slot_of_id_.find(o.landmark); it != slot_of_id_.end())
+          slot = it->second;
       } else {
         // One shared ML rule (robot/data_association.hpp): min d^2 + log det S inside the gate.
         slot = robot::associate_max_likelihood(
@@ -127,11 +128,7 @@ class EkfSlamFilter final : public SlamFilter {
         const Mat<2> gz = RangeBearingSensor::inverse_jacobian_measurement(xp, o.z);
         slot = core_.augment(m, inverse_jacobian_pose(xp, o.z), gz * r * gz.transpose());
         id_of_slot_.push_back(o.landmark);
-        if (opt_.association == Association::kKnown) {
-          const auto id = static_cast<std::size_t>(o.landmark);
-          if (slot_of_id_.size() <= id) slot_of_id_.resize(id + 1, -1);
-          slot_of_id_[id] = slot;
-        }
+        if (opt_.association == Association::kKnown) slot_of_id_[o.landmark] = slot;
         ++stats_.new_landmarks;
         continue;
       }
@@ -165,7 +162,10 @@ class EkfSlamFilter final : public SlamFilter {
   robot::AnyMotionModel base_;   ///< the model at its nominal step
   robot::AnyMotionModel model_;  ///< the model for the current step length
   EkfSlamCore core_;
-  std::vector<int> slot_of_id_, id_of_slot_;
+  // Known association: the slot of each landmark id. A hash map, not a table indexed by id: ids
+  // are any int in [0, 2^31 - 1], and a table up to the largest would take 8 GiB.
+  std::unordered_map<int, int> slot_of_id_;
+  std::vector<int> id_of_slot_;
   SlamStats stats_;
 };
 
@@ -237,7 +237,7 @@ class ParticleSlamFilter final : public SlamFilter {
     for (std::size_t k = 0; k < landmarks.size(); ++k) {
       map.push_back({landmarks[k], Mat<2>::Zero()});
       index_.insert(static_cast<std::uint32_t>(k), landmarks[k], 0.0);
-      slot_of_id_.push_back(static_cast<int>(k));
+      slot_of_id_[static_cast<int>(k)] = static_cast<int>(k);
       id_of_slot_.push_back(static_cast<int>(k));
     }
     for (auto& p : engine_.particles()) p.map = map;
@@ -260,14 +260,13 @@ class ParticleSlamFilter final : public SlamFilter {
       if (opt_.association != Association::kKnown) continue;
       require(obs[i].landmark >= 0, "SLAM step {}: known association needs a landmark id, got {}",
               n, obs[i].landmark);
-      const auto id = static_cast<std::size_t>(obs[i].landmark);
-      if (slot_of_id_.size() <= id) slot_of_id_.resize(id + 1, -1);
-      if (slot_of_id_[id] < 0) {
-        slot_of_id_[id] = static_cast<int>(id_of_slot_.size());
+      const auto [it, added] =
+          slot_of_id_.try_emplace(obs[i].landmark, static_cast<int>(id_of_slot_.size()));
+      if (added) {
         id_of_slot_.push_back(obs[i].landmark);
-        slots_[i] = slot_of_id_[id];
-      } else if (static_cast<std::size_t>(slot_of_id_[id]) < slots_before) {
-        slots_[i] = slot_of_id_[id];
+        slots_[i] = it->second;
+      } else if (static_cast<std::size_t>(it->second) < slots_before) {
+        slots_[i] = it->second;
       } else {
         use_[i] = 0;  // a second detection of a landmark created in this same step
         ++stats_.skipped;
@@ -531,7 +530,10 @@ class ParticleSlamFilter final : public SlamFilter {
   /// The pose proposal of opt_.method (EKF-SLAM is not a particle method).
   std::variant<FastSlam1Proposal, FastSlam2Proposal, ImplicitPoseProposal> proposal_;
   std::vector<ParticleOutcome> outcome_;
-  std::vector<int> slot_of_id_, id_of_slot_;
+  // Known association: the slot of each landmark id. A hash map, not a table indexed by id: ids
+  // are any int in [0, 2^31 - 1], and a table up to the largest would take 8 GiB.
+  std::unordered_map<int, int> slot_of_id_;
+  std::vector<int> id_of_slot_;
   std::vector<int> slots_, use_;
   PoseEstimate estimate_;
   SlamStats stats_;

@@ -55,6 +55,29 @@ TEST(Cli, MclNanFlagIsAUsageError) {
   EXPECT_EQ(run_cli("slam --control-noise nan").code, 2);
 }
 
+TEST(Cli, MclLabelGateOutOfRangeIsAUsageError) {
+  for (const char* value : {"x", "nan", "-1", "1e7"}) {
+    const auto r = run_cli(std::string("mcl --runs 1 --label-gate ") + value);
+    EXPECT_EQ(r.code, 2) << value;
+    EXPECT_NE(r.err.find("--label-gate"), std::string::npos) << r.err;
+  }
+}
+
+// A refusal that every run makes (the same InvalidArgument) is that message, exit code 1, not
+// "3 of 3 runs failed"; a failure in some runs keeps the summary with each run's message.
+TEST(Cli, ARefusalInEveryRunIsThatMessage) {
+  const std::string cli = std::string("'") + IMPLICIT_CLI + "' mcl --runs 3 -M 10";
+  const auto all = implicit::test::run_shell("IMPLICIT_FAIL_RUN=-2 " + cli);
+  EXPECT_EQ(all.code, 1) << all.err;
+  EXPECT_NE(all.err.find("refusal requested by IMPLICIT_FAIL_RUN=-2"), std::string::npos)
+      << all.err;
+  EXPECT_EQ(all.err.find("runs failed"), std::string::npos) << all.err;
+  const auto one = implicit::test::run_shell("IMPLICIT_FAIL_RUN=1 " + cli);
+  EXPECT_NE(one.code, 0);
+  EXPECT_NE(one.err.find("1 of 3 runs failed"), std::string::npos) << one.err;
+  EXPECT_NE(one.err.find("run 1: failure requested"), std::string::npos) << one.err;
+}
+
 TEST(Cli, NegativeSeedIsAUsageErrorNotAWrap) {
   const auto r = run_cli("slit --seed -1");
   EXPECT_EQ(r.code, 2);

@@ -182,6 +182,15 @@ TEST(PrintedText, ProgressCountsNeverGoBack) {
   EXPECT_GE(lines, 10) << err;
 }
 
+// One SLAM run reports its progress as it goes (steps), not only "1/1" at its end.
+TEST(PrintedText, OneSlamRunShowsProgressWithinTheRun) {
+  const auto r = run_cli("slam --method ekf --datasets 1 --threads 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("steps: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(10%)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(50%)"), std::string::npos) << r.err;
+}
+
 TEST(PrintedText, TheReportListsTheFiguresByNumber) {
   TempDir dir("printed_figures");
   const report::Text text = report::report_text();

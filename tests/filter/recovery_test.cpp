@@ -123,6 +123,9 @@ Filter make_filter(std::size_t m, const double* increment, bool recovery) {
   o.seed = 3;
   o.recovery = test_recovery();
   o.recovery.enabled = recovery;
+  // The detections here are placeholders that FixedProposal never reads; the prediction gate
+  // on labels (label_gate_test.cpp) would rightly leave them out, so it is off.
+  o.association.label_gate = 0.0;
   return Filter(UteModel(), RangeBearingSensor(), map, FixedProposal{increment}, o);
 }
 
@@ -225,6 +228,7 @@ TEST(KldEngine, ParticleCountFollowsTheBins) {
   o.kld.enabled = true;
   o.kld.min_particles = 50;
   o.kld.max_particles = 4000;
+  o.association.label_gate = 0.0;  // placeholder detections, as in make_filter
   const std::vector<LabelledMeasurement> z(1, LabelledMeasurement{Measurement(7.0, 0.8), 0});
   for (double spread : {1e-6, 25.0}) {
     Filter pf(UteModel(), RangeBearingSensor(), map, FixedProposal{&increment}, o);

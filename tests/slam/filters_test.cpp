@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <limits>
 #include <string>
 
 #include <unistd.h>
@@ -157,6 +158,35 @@ TEST(Association, MaximumLikelihoodPicksTheRightLandmarkAndGatesNewOnes) {
     f->step(4, still, std::vector<Observation>{{sensor.predict(x0, Landmark(12, 5)), -1}});
     EXPECT_EQ(f->map().landmarks.size(), 3u) << to_string(method);
     EXPECT_EQ(f->stats().new_landmarks, 3u) << to_string(method);
+  }
+}
+
+// Known association with ids at both ends of [0, 2^31 - 1]: each id keeps its own landmark,
+// and a second sighting updates it (the id to slot lookup is a hash map, not a table up to the
+// largest id, which would take 8 GiB here).
+TEST(Association, KnownIdsUpToTheLargestIntKeepTheirLandmarks) {
+  const robot::RangeBearingSensor sensor;
+  const Pose x0(0, 0, 0);
+  const std::vector<Landmark> truth = {Landmark(10, 0), Landmark(0, 8)};
+  const std::vector<int> ids = {std::numeric_limits<int>::max(), 0};
+  for (SlamMethod method : {SlamMethod::kEkf, SlamMethod::kFastSlam2, SlamMethod::kImplicit}) {
+    SlamOptions opt;
+    opt.method = method;
+    opt.association = Association::kKnown;
+    opt.particles = 2;
+    auto f = make_slam_filter(opt, x0);
+    const Control still(0.0, 0.0);
+    for (std::uint64_t n = 1; n <= 2; ++n) {
+      std::vector<Observation> z;
+      for (std::size_t k = 0; k < truth.size(); ++k)
+        z.push_back({sensor.predict(x0, truth[k]), ids[k]});
+      f->step(n, still, z);
+    }
+    const MapEstimate m = f->map();
+    ASSERT_EQ(m.landmarks.size(), 2u) << to_string(method);
+    EXPECT_EQ(m.ids, ids) << to_string(method);
+    EXPECT_EQ(f->stats().new_landmarks, 2u) << to_string(method);
+    EXPECT_EQ(f->stats().updates, 2u) << to_string(method);
   }
 }
 

@@ -42,10 +42,13 @@ struct StepSummary {
   /// Counting models (landmark detections): mean over particles, weighted by the previous weights;
   /// other models: the parts of the prepared observation (beams).
   double detections_used = 0.0;
-  double detections_dropped = 0.0;     ///< counting models: idem
-  double newton_evaluations = 0.0;     ///< mean over particles
-  int fallbacks = 0;                   ///< particles that needed a Cholesky fallback
-  int failures = 0;                    ///< particles with a non-finite model output (weight 0)
+  double detections_dropped = 0.0;  ///< counting models: idem
+  double newton_evaluations = 0.0;  ///< mean over particles
+  int fallbacks = 0;                ///< particles that needed a Cholesky fallback
+  int failures = 0;                 ///< particles with a non-finite model output (weight 0)
+  /// Parts of the observation the prediction gate left out (labelled detections that the
+  /// predicted pose distribution could not produce: robot/landmark_observation.hpp, gate()).
+  int gated = 0;
   std::size_t particles = 0;           ///< particles after this step (varies under KLD-sampling)
   double injection_probability = 0.0;  ///< recovery: the fraction drawn from the source
   int injected = 0;                    ///< recovery: particles drawn from the source

@@ -145,6 +145,7 @@ struct LocalizationMetrics {
   double ess_fraction = 0.0;                                       ///< mean ESS/M over update steps
   double detections_used = 0.0;     ///< sum over steps of the per-particle mean
   double detections_dropped = 0.0;  ///< idem
+  int gated = 0;  ///< labelled detections left out by the prediction gate (StepSummary::gated)
   double newton_evaluations = 0.0;  ///< mean per particle per update step
   double min_log_likelihood_increment = 0.0;
   int fallbacks = 0;

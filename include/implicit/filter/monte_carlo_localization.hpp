@@ -69,6 +69,23 @@ constexpr bool needs_derivatives() {
     return false;
 }
 
+namespace detail {
+struct NoGateKept {};
+template <typename O>
+struct GateKeptOf {
+  using type = NoGateKept;
+};
+template <typename O>
+requires requires { typename O::GateKept; }
+struct GateKeptOf<O> {
+  using type = typename O::GateKept;
+};
+}  // namespace detail
+
+/// What a prediction-gated observation model keeps of an observation (an empty type otherwise).
+template <typename O>
+using GateKeptOf = typename detail::GateKeptOf<O>::type;
+
 template <robot::PoseMotionModel Motion, robot::ObservationModel Observation, typename Proposal>
 class MonteCarloLocalization {
  public:
@@ -175,8 +192,14 @@ class MonteCarloLocalization {
   /// errors (e.g. the file and line).
   const StepSummary& step(const Control& u, const typename Observation::Observation& z,
                           std::string_view where = "observation") {
-    prepared_ = observation_.prepare(z, where);
-    return step_impl(u, &prepared_, observation_size(prepared_), nullptr);
+    return step_observed(u, z, where, nullptr);
+  }
+
+  /// The same step, also weighted by a position fix (GPS) of the new state.
+  const StepSummary& step(const Control& u, const typename Observation::Observation& z,
+                          const PositionFix& fix, std::string_view where = "observation") {
+    validate(fix);
+    return step_observed(u, z, where, &fix);
   }
 
   /// A step with an observation prepared by prepare().
@@ -192,11 +215,74 @@ class MonteCarloLocalization {
   }
 
  private:
+  /// A step with an observation: a prediction-gated model first checks it against the predicted
+  /// pose distribution, and the step reads what it keeps (nothing kept: a prediction step).
+  const StepSummary& step_observed(const Control& u, const typename Observation::Observation& z,
+                                   std::string_view where, const PositionFix* fix) {
+    int gated = 0;
+    if constexpr (robot::PredictionGatedObservationModel<Observation>) {
+      robot::Pose mean;
+      robot::Mat3 cov;
+      if (observation_.gate_needed(z) && predicted_moments(u, mean, cov))
+        gated = observation_.gate(z, mean, cov, gate_kept_);
+      if (gated > 0) {
+        const typename Observation::Observation kept(gate_kept_);
+        if (observation_size_of(kept) == 0) {
+          step_impl(u, nullptr, 0, fix);
+        } else {
+          prepared_ = observation_.prepare(kept, where);
+          step_impl(u, &prepared_, observation_size(prepared_), fix);
+        }
+        summary_.gated = gated;
+        return summary_;
+      }
+    }
+    prepared_ = observation_.prepare(z, where);
+    return step_impl(u, &prepared_, observation_size(prepared_), fix);
+  }
+
+  template <typename Z>
+  static std::size_t observation_size_of(const Z& z) {
+    if constexpr (requires { z.size(); })
+      return z.size();
+    else
+      return 1;
+  }
+
   static int observation_size(const Prepared& z) {
     if constexpr (requires { z.size(); })
       return static_cast<int>(z.size());
     else
       return 1;
+  }
+
+  /// The predicted pose distribution at this step: the last posterior's mean and covariance
+  /// (summary_) through the motion model by the unscented transform (six sigma points, weights
+  /// 1/6, so no Jacobian of the motion model is needed), plus the mean process covariance. O(1)
+  /// in the particle count. False when the covariance does not factor or a prediction fails.
+  bool predicted_moments(const Control& u, robot::Pose& mean, robot::Mat3& cov) const {
+    const Eigen::LLT<robot::Mat3> llt(summary_.covariance + 1e-12 * robot::Mat3::Identity());
+    if (llt.info() != Eigen::Success || !summary_.mean.allFinite()) return false;
+    const robot::Mat3 spread = std::sqrt(3.0) * robot::Mat3(llt.matrixL());
+    robot::Pose centre, f[6];
+    robot::Mat3 sigma1, process = robot::Mat3::Zero();
+    SmallFactor<3> unused;
+    detail::predict_pose(step_motion_, summary_.mean, u, centre, sigma1, unused);
+    if (!centre.allFinite()) return false;
+    Vec<3> sum = Vec<3>::Zero();
+    for (int k = 0; k < 6; ++k) {
+      const robot::Pose chi = summary_.mean + (k < 3 ? 1.0 : -1.0) * spread.col(k % 3);
+      detail::predict_pose(step_motion_, chi, u, f[k], sigma1, unused);
+      if (!f[k].allFinite() || !sigma1.allFinite()) return false;
+      f[k](2) = centre(2) + wrap_angle(f[k](2) - centre(2));  // headings on the centre's branch
+      sum += f[k];
+      process += sigma1 / 6.0;
+    }
+    mean = sum / 6.0;
+    cov = process;
+    for (const robot::Pose& fk : f) cov.noalias() += (fk - mean) * (fk - mean).transpose() / 6.0;
+    mean(2) = wrap_angle(mean(2));
+    return true;
   }
 
   void restart() {
@@ -331,6 +417,7 @@ class MonteCarloLocalization {
   FilterOptions options_;
   Context context_;
   Prepared prepared_;
+  [[no_unique_address]] GateKeptOf<Observation> gate_kept_;  ///< gate()'s kept parts
   ParticleEngine<robot::Pose> engine_;
   PoseMoments pose_moments_;
   std::vector<ParticleStats> stats_;

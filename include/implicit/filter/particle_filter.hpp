@@ -55,8 +55,8 @@ class ParticleFilter
   /// One motion step with control u and the detections seen after it (empty: predict only).
   const StepSummary& step(const Control& u, std::span<const LabelledMeasurement> z = {}) {
     if (z.empty()) return Base::step(u);
-    const Detections d = this->observation().prepare(z, "particle filter");
-    return Base::step_prepared(u, d);
+    return Base::step(u, z,
+                      "particle filter");  // labelled detections gated (observation_model.hpp)
   }
 
   /// A step that also weights by a position fix (GPS) of the new state.
@@ -64,8 +64,7 @@ class ParticleFilter
                           const PositionFix& fix) {
     validate(fix);
     if (z.empty()) return Base::step_prepared(u, nullptr, &fix);
-    const Detections d = this->observation().prepare(z, "particle filter");
-    return Base::step_prepared(u, &d, &fix);
+    return Base::step(u, z, fix, "particle filter");
   }
 };
 

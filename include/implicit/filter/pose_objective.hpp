@@ -39,8 +39,8 @@ class PoseObjective {
 
   /// F(x); optionally its gradient and the Gauss-Newton matrix (as `hessian` and as
   /// `gauss_newton`: the model gives no exact second derivatives).
-  double evaluate(const robot::Pose& x, Vec<3>* gradient = nullptr,
-                  robot::Mat3* hessian = nullptr, robot::Mat3* gauss_newton = nullptr) const {
+  double evaluate(const robot::Pose& x, Vec<3>* gradient = nullptr, robot::Mat3* hessian = nullptr,
+                  robot::Mat3* gauss_newton = nullptr) const {
     const Vec<3> d = x - prediction_;
     const Vec<3> pd = prior_information_ * d;
     double value = constant_ + 0.5 * d.dot(pd);

@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <span>
 #include <string_view>
 #include <utility>
@@ -45,10 +46,18 @@ struct LabelledMeasurement {
   int landmark = -1;
 };
 
+/// The default gate on a labelled detection's d^2 against the filter's prediction: the 2-dof
+/// chi-square quantile at 1 - 1e-6, -2 log(1e-6). A detection consistent with the model fails it
+/// once in a million steps; one from another landmark or a broken sensor fails it at once.
+inline constexpr double kLabelGateDefault = 27.631021115928547;
+
 struct AssociationOptions {
   double gate = kChiSquare2Dof99;  ///< chi-square gate on d^2 (2 dof, 99 %)
-  bool clutter = true;             ///< dropped detections contribute p0
-  double min_range = 0.05;         ///< [m] landmarks closer than this are not candidates
+  /// Labelled detections: chi-square gate on d^2 against the predicted pose distribution
+  /// (LandmarkObservation::gate); 0 = every label is trusted.
+  double label_gate = kLabelGateDefault;
+  bool clutter = true;      ///< dropped detections contribute p0
+  double min_range = 0.05;  ///< [m] landmarks closer than this are not candidates
 };
 
 /// Detections per step that a filter accepts (the Car Park has at most 6): the implicit
@@ -74,6 +83,7 @@ class LandmarkObservation {
   using SensorType = Sensor;
   using Observation = std::span<const LabelledMeasurement>;
   using Prepared = LandmarkDetections<Sensor>;
+  using GateKept = std::vector<LabelledMeasurement>;
 
   /// Throws InvalidArgument for a gate that is not positive or a sensor covariance that is not
   /// symmetric positive definite.
@@ -81,6 +91,9 @@ class LandmarkObservation {
       : sensor_(std::move(sensor)), map_(std::move(map)), association_(association) {
     require(association_.gate > 0, "particle filter: expected a positive gate, got {}",
             association_.gate);
+    require(association_.label_gate >= 0 && std::isfinite(association_.label_gate),
+            "particle filter: expected a label gate >= 0 (0: off), got {}",
+            association_.label_gate);
     const Mat2& noise = sensor_.noise_covariance();
     Eigen::LLT<Mat2> llt(noise);
     require(llt.info() == Eigen::Success && noise.allFinite(),
@@ -116,6 +129,45 @@ class LandmarkObservation {
 
   /// The detections as a Prepared without the checks (global starts read any number of them).
   Prepared view(std::span<const LabelledMeasurement> z) const { return Prepared{this, z}; }
+
+  /// Leaves out the labelled detections that the predicted pose distribution N(mean, cov) could
+  /// not produce: d^2 = e^T S^-1 e > label_gate with e = z - h(mean, landmark) and
+  /// S = H cov H^T + Sigma2 (H: the Jacobian at the mean). Unlabelled detections are kept (their
+  /// association has its own gate). Returns how many were left out; when that is not 0, `kept`
+  /// holds the rest in their order. A spread-out cloud (a global start) gives a large S, so
+  /// nothing is gated until the filter knows where it is.
+  bool gate_needed(const Observation& z) const {
+    return association_.label_gate > 0.0 &&
+           std::any_of(z.begin(), z.end(),
+                       [](const LabelledMeasurement& lz) { return lz.landmark >= 0; });
+  }
+
+  int gate(const Observation& z, const Pose& mean, const Mat3& cov, GateKept& kept) const {
+    if (association_.label_gate <= 0.0) return 0;
+    int left_out = 0;
+    kept.clear();
+    for (const LabelledMeasurement& lz : z) {
+      if (lz.landmark >= 0 && lz.landmark < static_cast<int>(map_.size()) && lz.z.allFinite() &&
+          label_distance2(mean, cov, lz) > association_.label_gate) {
+        ++left_out;
+        continue;
+      }
+      kept.push_back(lz);
+    }
+    return left_out;
+  }
+
+  /// d^2 of a labelled detection against N(mean, cov) (see gate); NaN if S is not SPD.
+  double label_distance2(const Pose& mean, const Mat3& cov, const LabelledMeasurement& lz) const {
+    Measurement h;
+    Mat23 j;
+    predict_with_jacobian(mean, map_.position(static_cast<std::size_t>(lz.landmark)), h, j);
+    const Measurement e = sensor_.residual(h, lz.z);
+    const Mat2 s = j * cov * j.transpose() + sensor_.noise_covariance();
+    const Eigen::LLT<Mat2> llt(s);
+    if (llt.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
+    return e.dot(llt.solve(e));
+  }
 
   /// Maximum-likelihood association of z at pose x with innovation covariance
   /// H pose_cov H^T + Sigma2 (pose_cov = nullptr: Sigma2 alone); -1 when nothing is in the gate.
@@ -237,5 +289,6 @@ inline constexpr bool is_landmark_observation_v<LandmarkObservation<S>> = true;
 
 static_assert(DifferentiableObservationModel<LandmarkObservation<RangeBearingSensor>>);
 static_assert(CountingObservationModel<LandmarkObservation<RangeBearingSensor>>);
+static_assert(PredictionGatedObservationModel<LandmarkObservation<RangeBearingSensor>>);
 
 }  // namespace implicit::robot

@@ -26,6 +26,11 @@
 // detections outside the association gate): log_likelihood(z, x, counts)
 // (CountingObservationModel).
 //
+// And it may check an observation against the filter's prediction before any particle reads it
+// (PredictionGatedObservationModel): parts that no pose the filter considers possible could
+// produce (a labelled detection 500 m from a landmark 5 m away) are left out of the step and
+// counted, instead of moving every particle.
+//
 // A motion model gives the Gaussian transition x_n ~ N(predict(x, u), process_covariance(x, u))
 // for its own Control type (a Vec<2> speed and steering for the Ute, an odometry increment for
 // OdometryModel); a model without a `Control` member type takes robot::Control.
@@ -102,5 +107,17 @@ concept CountingObservationModel = ObservationModel<O> &&
     requires(const O& o, const typename O::Prepared& p, const Pose& x, ObservationCounts& c) {
   { o.log_likelihood(p, x, c) } -> std::convertible_to<double>;
 };
+
+/// An observation model that gates parts of an observation against the filter's predicted pose
+/// distribution (mean, covariance) at a step: gate(z, mean, cov, kept) returns how many parts it
+/// left out; when that is not 0, `kept` holds the others and the step uses Observation(kept).
+/// gate_needed(z) says whether z has anything to gate (the filter skips the prediction if not).
+template <typename O>
+concept PredictionGatedObservationModel = ObservationModel<O> &&
+    requires(const O& o, const typename O::Observation& z, const Pose& mean, const Mat3& cov,
+             typename O::GateKept& kept) {
+  { o.gate(z, mean, cov, kept) } -> std::convertible_to<int>;
+  { o.gate_needed(z) } -> std::convertible_to<bool>;
+} && std::constructible_from<typename O::Observation, typename O::GateKept&>;
 
 }  // namespace implicit::robot

@@ -21,6 +21,7 @@
 // known association, otherwise the nearest true landmark to each estimated one.
 
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "implicit/slam/dataset.hpp"
@@ -50,8 +51,10 @@ struct SlamRun {
 };
 
 /// Runs the estimator from the data set's initial pose over every step. With `known_map` the
-/// filter starts with the true landmarks (localisation).
-SlamRun run_filter(const SlamDataset& data, const SlamOptions& options, bool known_map = false);
+/// filter starts with the true landmarks (localisation). `on_step`, if set, is called after each
+/// step (progress within a long run).
+SlamRun run_filter(const SlamDataset& data, const SlamOptions& options, bool known_map = false,
+                   const std::function<void()>& on_step = {});
 
 struct SlamMetrics {
   double error_percent = 0.0;
