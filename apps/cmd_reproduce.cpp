@@ -402,11 +402,12 @@ int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt,
 
 int reproduce(RunContext ctx, const ReproduceOptions& opt) {
   ctx.out_dir = std::filesystem::absolute(ctx.out_dir);
-  create_out_dir(ctx.out_dir);
   json results;
   if (opt.report_only) {
+    // Read before the folder is made: a refused --report-only leaves nothing behind.
     const auto file = ctx.out_dir / "results.json";
     results = read_results(file);
+    create_out_dir(ctx.out_dir);
     try {
       return finish(results, ctx, opt, file);
     } catch (const json::exception& e) {
@@ -414,6 +415,7 @@ int reproduce(RunContext ctx, const ReproduceOptions& opt) {
       throw ParseError(fmt::format("{}: unexpected content ({})", file.string(), e.what()));
     }
   }
+  create_out_dir(ctx.out_dir);
   const auto start = std::chrono::steady_clock::now();
   // Before anything is written: an earlier run's files go, so that DIR never mixes two runs.
   remove_earlier_run(ctx.out_dir);

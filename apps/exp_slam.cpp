@@ -266,6 +266,11 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     if (s.dense_landmarks > 0)
       scenario = slam::make_dense_scenario(scenario, s.dense_laps, s.dense_landmarks, ctx.seed);
   }
+  // --control-noise is the Ute's P: on a unicycle it would be ignored, so it is refused there.
+  require(model != "unicycle" || s.control_noise == SlamSettings{}.control_noise,
+          "--control-noise {}: that is the Ute's control noise P = diag(p, p); the unicycle's is "
+          "--control-sd V OMEGA (sd of v [m/s] and omega [rad/s])",
+          s.control_noise);
   // Logs that declare no vehicle (neither record nor `# vehicle` comment) run as the Car Park's
   // Ute (or the --model given, with its defaults): said loudly, and recorded in the JSON.
   bool vehicle_assumed = false;
@@ -369,7 +374,17 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["vehicle_assumed"] = vehicle_assumed;
   j["laser_every"] = s.laser_every;
   // The filter's model, so that a run on real data can be repeated from its JSON alone.
-  j["control_noise"] = s.control_noise;
+  // The motion noise the filter used (unicycle: its own; --control-noise is the Ute's only).
+  if (model == "unicycle") {
+    const robot::UnicycleParams up = unicycle_params(robot::RobotLog{}, noise, {});
+    j["control_noise"] = nullptr;
+    j["control_sd"] = {up.control_std(0), up.control_std(1)};
+    j["state_sd"] = {up.state_std(0), up.state_std(1), up.state_std(2)};
+  } else {
+    j["control_noise"] = s.control_noise;
+    j["control_sd"] = {base.motion.control_std(0), base.motion.control_std(1)};
+    j["state_sd"] = {base.motion.state_std(0), base.motion.state_std(1), base.motion.state_std(2)};
+  }
   j["range_sd_m"] = std::sqrt(base.sensor.noise_covariance()(0, 0));
   j["bearing_sd_deg"] = std::sqrt(base.sensor.noise_covariance()(1, 1)) * 180.0 / kPi;
   j["gate_chi2"] = base.gate_chi2;

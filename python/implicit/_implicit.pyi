@@ -5,7 +5,7 @@ from typing import Any, Callable, Optional, Sequence
 import numpy as np
 import numpy.typing as npt
 
-from . import data as data, laser as laser, models as models, slam as slam
+from . import data as data, eval as eval, laser as laser, models as models, slam as slam
 
 ArrayLike = npt.ArrayLike
 __version__: str

@@ -36,6 +36,25 @@ TEST(AnyRobotCli, SimulatedUnicycleLogRunsWithItsModelAndIsRefusedByTheOther) {
   EXPECT_NE(wrong.err.find("--model unicycle"), std::string::npos) << wrong.err;
 }
 
+// slam on a unicycle log: --control-noise (the Ute's P) is refused instead of ignored, and the
+// JSON gives the unicycle noise the filter used, so the run can be repeated from it.
+TEST(AnyRobotCli, SlamOnAUnicycleRefusesTheUteNoiseAndReportsItsOwn) {
+  TempDir dir("any_robot_slam");
+  const std::string log = (dir.path() / "u.log.gz").string();
+  ASSERT_EQ(run_cli("simulate --model unicycle --seed 3 --steps 300 --out '" + log + "'").code, 0);
+  const std::string slam = "slam --method ekf --datasets 1 --json --data '" + log + "'";
+  const auto refused = run_cli(slam + " --control-noise 0.3");
+  EXPECT_EQ(refused.code, 1) << refused.err;
+  EXPECT_NE(refused.err.find("--control-noise 0.3"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("--control-sd V OMEGA"), std::string::npos) << refused.err;
+  const auto r = run_cli(slam + " --control-sd 0.2 0.07");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["control_noise"].is_null());
+  EXPECT_EQ(j["control_sd"], nlohmann::json::array({0.2, 0.07}));
+  EXPECT_EQ(j["state_sd"].size(), 3u);
+}
+
 TEST(AnyRobotCli, TheCarParkIsAUteAndRefusesTheUnicycle) {
   const auto r = run_cli("mcl --model unicycle -M 10 --runs 1");
   EXPECT_EQ(r.code, 1);

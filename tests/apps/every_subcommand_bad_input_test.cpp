@@ -1,0 +1,131 @@
+// One table of bad inputs over every subcommand: each row's exit code (2 for a refused flag, 1 for
+// refused data) and the words its message must contain (the flag or the file it is about). The
+// subcommands are read from `implicit --help`, so a new subcommand without rows here fails the
+// test. Only refusals that happen before any work are listed: the table runs in seconds, also
+// under the sanitizers. Deeper checks per subcommand live in bad_input_cli_test.cpp and the
+// subcommand's own tests.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "apps/cli_runner.hpp"
+
+namespace implicit::test {
+namespace {
+
+struct SubcommandBadInput {
+  std::string args;  ///< DIR stands for a fresh temporary folder
+  int code;
+  std::vector<std::string> says;
+};
+
+// The subcommands `implicit --help` lists (the lines under "Subcommands:").
+std::set<std::string> every_subcommand_listed() {
+  const auto r = run_cli("--help");
+  std::istringstream in(r.out + r.err);
+  std::set<std::string> names;
+  bool listing = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("Subcommands:", 0) == 0) {
+      listing = true;
+      continue;
+    }
+    if (!listing) continue;
+    if (line.size() < 3 || line.rfind("  ", 0) != 0 || line[2] == ' ') break;
+    names.insert(line.substr(2, line.find(' ', 2) - 2));
+  }
+  return names;
+}
+
+// Rows of each subcommand's own flags and files (the generic flags are added for all below).
+const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_rows() {
+  static const std::map<std::string, std::vector<SubcommandBadInput>> rows = {
+      {"arm",
+       {{"arm --estimator nope", 2, {"--estimator", "nope"}}, {"arm --seed -1", 2, {"--seed"}}}},
+      {"eval",
+       {{"eval", 2, {"--est"}},
+        {"eval --ref DIR/gone.tum --est DIR/gone.tum", 1, {"gone.tum"}},
+        {"eval --est DIR/gone.tum --delta 0", 2, {"--delta"}},
+        {"eval --est DIR/gone.tum --align se4", 2, {"--align", "se4"}}}},
+      {"himmelblau",
+       {{"himmelblau --runs 0", 2, {"--runs"}}, {"himmelblau --runs nan", 2, {"--runs"}}}},
+      {"map",
+       {{"map --out DIR/m.yaml", 2, {"--data"}},
+        {"map --data DIR/gone.log --out DIR/m.yaml", 1, {"gone.log"}},
+        {"map --data DIR/gone.log --out DIR/m.yaml --resolution 2", 2, {"--resolution"}}}},
+      {"mcl",
+       {{"mcl --particles 0", 2, {"--particles"}},
+        {"mcl --data DIR/gone.log", 1, {"gone.log"}},
+        {"mcl --label-gate -1", 2, {"--label-gate"}},
+        {"mcl --init nowhere", 2, {"--init", "nowhere"}}}},
+      {"proposal-gain",
+       {{"proposal-gain --ratio-dt 0", 2, {"--ratio-dt"}},
+        {"proposal-gain --ratios nan", 2, {"--ratios"}}}},
+      {"reproduce",
+       {{"reproduce --only nope --out DIR/r", 2, {"--only", "nope"}},
+        {"reproduce --quick --report-only --out DIR/none", 1, {"DIR/none"}}}},
+      {"simulate",
+       {{"simulate", 2, {"--out"}},
+        {"simulate --steps 0 --out DIR/s.log", 2, {"--steps"}},
+        {"simulate --model car --out DIR/s.log", 2, {"--model", "car"}}}},
+      {"slam",
+       {{"slam --particles 0", 2, {"--particles"}},
+        {"slam --data DIR/gone.log", 1, {"gone.log"}},
+        {"slam --control-noise nan", 2, {"--control-noise"}}}},
+      {"slit", {{"slit --runs 0", 2, {"--runs"}}, {"slit --mode nope", 2, {"--mode", "nope"}}}},
+  };
+  return rows;
+}
+
+// The subcommand with its required flags (to files that do not exist: a flag error comes first).
+std::string every_subcommand_required(const std::string& name) {
+  if (name == "eval") return "eval --est DIR/gone.tum";
+  if (name == "map") return "map --data DIR/gone.log --out DIR/m.yaml";
+  if (name == "simulate") return "simulate --out DIR/s.log";
+  return name;
+}
+
+TEST(EverySubcommand, HasRowsInTheBadInputTable) {
+  const std::set<std::string> listed = every_subcommand_listed();
+  ASSERT_GE(listed.size(), 10u) << "could not read the subcommands from implicit --help";
+  for (const std::string& name : listed)
+    EXPECT_TRUE(every_subcommand_rows().count(name)) << "no bad-input rows for '" << name << "'";
+  for (const auto& [name, rows] : every_subcommand_rows())
+    EXPECT_TRUE(listed.count(name)) << "rows for '" << name << "', which --help does not list";
+}
+
+TEST(EverySubcommand, RefusesBadInputNamingIt) {
+  TempDir dir("every_subcommand");
+  std::vector<SubcommandBadInput> all;
+  for (const auto& [name, rows] : every_subcommand_rows()) {
+    all.insert(all.end(), rows.begin(), rows.end());
+    // Every subcommand (with its required flags): an unknown flag, and a common option out of
+    // range.
+    const std::string base = every_subcommand_required(name);
+    all.push_back({base + " --no-such-flag", 2, {"--no-such-flag"}});
+    all.push_back({base + " --threads nan", 2, {"--threads"}});
+    all.push_back({base + " --threads 2000", 2, {"--threads"}});
+  }
+  for (SubcommandBadInput row : all) {
+    for (std::size_t at = row.args.find("DIR"); at != std::string::npos;
+         at = row.args.find("DIR", at + dir.path().string().size()))
+      row.args.replace(at, 3, dir.path().string());
+    const auto r = run_cli(row.args);
+    EXPECT_EQ(r.code, row.code) << row.args << "\n" << r.err;
+    for (std::string s : row.says) {
+      if (const auto at = s.find("DIR"); at != std::string::npos)
+        s.replace(at, 3, dir.path().string());
+      EXPECT_NE(r.err.find(s), std::string::npos) << row.args << "\n" << r.err;
+    }
+  }
+  // A refused command writes nothing.
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+}  // namespace
+}  // namespace implicit::test
