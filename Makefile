@@ -57,16 +57,20 @@ configure-sanitize: deps
 	  -DIMPLICIT_BUILD_FUZZERS=ON -DIMPLICIT_BUILD_BENCHMARKS=OFF -DIMPLICIT_BUILD_PYTHON=OFF \
 	  -DIMPLICIT_BUILD_EXAMPLES=OFF $(CMAKE_FLAGS) -DIMPLICIT_WITH_MPI=OFF > /dev/null
 
-# The slowest sanitized test (about 2 min) starts first instead of running alone at the end: on a
-# fresh build ctest knows no costs, so one is seeded (ctest's own cost file, kept if present).
-SANITIZE_FIRST ?= Reproduce.QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperiment
+# The slowest sanitized test starts first instead of running alone at the end: on a fresh build
+# ctest knows no costs, so one is seeded (ctest's own cost file, kept if present).
+SANITIZE_FIRST ?= ArmExperiment.GenericAndClosedFormGiveTheSameClosedLoop
+# Left out under the sanitizers for CI's time budget: the whole quick reproduce (5.5 min of one
+# core there, a fifth of the sanitized suite). `make test` runs it; under the sanitizers each
+# experiment's code still runs through its own tests and the `--only arm` quick reproduces.
+SANITIZE_SKIP ?= ^Reproduce\.QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperiment$$
 test-sanitize: configure-sanitize
 	@cmake --build $(SANITIZE_DIR) -j $(JOBS) --target $(SANITIZE_TARGETS)
 	@mkdir -p $(SANITIZE_DIR)/Testing/Temporary
 	@test -f $(SANITIZE_DIR)/Testing/Temporary/CTestCostData.txt || \
-	  printf '%s 1 130\n---\n' "$(SANITIZE_FIRST)" > $(SANITIZE_DIR)/Testing/Temporary/CTestCostData.txt
+	  printf '%s 1 50\n---\n' "$(SANITIZE_FIRST)" > $(SANITIZE_DIR)/Testing/Temporary/CTestCostData.txt
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --test-dir $(SANITIZE_DIR) -LE "$(SANITIZE_EXCLUDE)" -E "_NOT_BUILT$$" \
+	  ctest --test-dir $(SANITIZE_DIR) -LE "$(SANITIZE_EXCLUDE)" -E "_NOT_BUILT$$|$(SANITIZE_SKIP)" \
 	  --output-on-failure -j $(JOBS)
 
 # Each target from its seed corpus (fuzz/corpus/NAME, read only; new inputs go to

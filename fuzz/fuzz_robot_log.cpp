@@ -7,7 +7,11 @@
 //    bit (17 significant digits);
 //  * the step schedule and truth interpolation of `implicit mcl/slam --data` run on it, and the
 //    odometry and truth interpolation of `implicit mcl --sensor laser --data` at its scans; every
-//    `laser` record passes LaserScan::validate, and a written log is told from a CARMEN log.
+//    `laser` record passes LaserScan::validate, and a written log is told from a CARMEN log;
+//  * a log of at most kFuzzRunSteps steps goes through the runs themselves, with a few particles:
+//    Monte Carlo localization with both proposals and EKF-SLAM on the same steps; each accepts
+//    it or refuses it with ParseError / InvalidArgument (a log that reads but cannot be run), never
+//    crashes.
 // A gzip-compressed input (magic bytes 1f 8b) goes through read_robot_log, as a .gz file would.
 
 #include <cstdint>
@@ -18,7 +22,10 @@
 #include <vector>
 
 #include "implicit/core/error.hpp"
+#include "implicit/filter/localization.hpp"
 #include "implicit/robot/log_format.hpp"
+#include "implicit/slam/dataset.hpp"
+#include "implicit/slam/evaluate.hpp"
 #include "scratch.hpp"
 
 namespace {
@@ -92,6 +99,43 @@ void require_same(const RobotLog& a, const RobotLog& b) {
       fail("a truth record");
 }
 
+// Longer logs are read and scheduled above, but not run: a fuzz input should take milliseconds.
+constexpr std::size_t kFuzzRunSteps = 200;
+
+template <typename Run>
+void run_or_refuse(Run&& run) {
+  try {
+    run();
+  } catch (const implicit::ParseError&) {  // e.g. no `initial` record: not a runnable log
+  } catch (const implicit::InvalidArgument&) {
+  }
+}
+
+// What `implicit mcl --data` and `implicit slam --data` run on an accepted log, briefly.
+void run_briefly(const RobotLog& log, std::size_t steps) {
+  if (steps == 0 || steps > kFuzzRunSteps) return;
+  const UteParams vehicle;  // the Car Park's Ute, as a log without a `vehicle` record runs
+  run_or_refuse([&] {
+    const implicit::filter::LocalizationProblem problem =
+        implicit::filter::make_problem(log, vehicle.dt);
+    implicit::filter::FilterOptions options;
+    options.particles = 4;
+    const UteModel model(vehicle);
+    const RangeBearingSensor sensor;
+    implicit::filter::run_localization(problem, model, sensor,
+                                       implicit::filter::BootstrapProposal{}, options);
+    implicit::filter::run_localization(problem, model, sensor, implicit::filter::ImplicitProposal{},
+                                       options);
+  });
+  run_or_refuse([&] {
+    const implicit::slam::SlamDataset data =
+        implicit::slam::dataset_from_robot_log(log, vehicle, "input.log");
+    implicit::slam::SlamOptions options;
+    options.method = implicit::slam::SlamMethod::kEkf;
+    implicit::slam::run_filter(data, options);
+  });
+}
+
 RobotLog read(std::string_view text) {
   if (text.size() >= 2 && static_cast<unsigned char>(text[0]) == 0x1f &&
       static_cast<unsigned char>(text[1]) == 0x8b)
@@ -129,5 +173,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   interpolate_odometry(log, times);
   interpolate_truth(log, times);
   if (!log.laser_scans.empty() && !is_robot_log(out.str())) fail("the format detection");
+  run_briefly(log, schedule.steps.size());
   return 0;
 }
