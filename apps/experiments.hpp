@@ -54,12 +54,12 @@ struct MclSettings {
   std::string method = "implicit";  ///< "standard" (bootstrap) or "implicit"
   int particles = 100;
   int runs = 20;
-  std::string data_dir;             ///< empty: the bundled Car Park data
-  std::string config = "A";         ///< noise setting: "A" (P = 0.5) or "B" (P = 0.1)
-  double p = -1.0;                  ///< override P (both diagonal entries); < 0: from config
-  double q = -1.0;                  ///< override Q position entries q1 = q2 [m]; < 0: 0.1
-  std::string map = "linear";       ///< implicit proposal: "linear" or "random" map
-  bool clutter = true;              ///< dropped detections contribute the clutter density p0
+  std::string data_dir;        ///< empty: the bundled Car Park data
+  std::string config = "A";    ///< noise setting: "A" (P = 0.5) or "B" (P = 0.1)
+  double p = -1.0;             ///< override P (both diagonal entries); < 0: from config
+  double q = -1.0;             ///< override Q position entries q1 = q2 [m]; < 0: 0.1
+  std::string map = "linear";  ///< implicit proposal: "linear" or "random" map
+  bool clutter = true;         ///< dropped detections contribute the clutter density p0
   /// Labelled detections: chi-square gate on d^2 against the prediction; 0 = trust every label.
   double label_gate = robot::kLabelGateDefault;
   std::string sigma2 = "variance";  ///< reading of Table 7's Sigma2: "variance" or "std"
