@@ -11,6 +11,7 @@ packages=(
   clang-14 libclang-rt-14-dev  # make test-sanitize, make fuzz-smoke: clang++ 14, ASan, UBSan, libFuzzer
   libopenmpi-dev openmpi-bin  # the MPI build (docs/cluster.md)
   libyaml-cpp-dev  # ROS map_server map files (robot/map_io.cpp)
+  libsqlite3-dev libzstd-dev liblz4-dev libbz2-dev  # ROS bags (robot/bag*.cpp)
   pkgconf doxygen
 )
 
