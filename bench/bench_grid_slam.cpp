@@ -13,11 +13,21 @@
 //    the reference pose plus noise (sd 0.05 m, 0.02 rad) and followed by resampling with random
 //    parents; counters: the set's bytes per particle (index + distinct tiles / M), one map's
 //    bytes alone, and the dense map's.
+//  * ScanMatch/value, ScanMatch/derivatives: the scan likelihood of the last gated scan against
+//    the map of the scans before (slam/grid/scan_match.hpp, 60 beams, 8 x 8 cells each), per
+//    evaluation: what every proposal pays per particle per evaluation;
+//  * Proposal/<name>: one particle's proposal for the last gated scan (odometry: the reference
+//    increment perturbed with alphas 0.05), per particle per scan; counter evaluations;
+//  * GridSlam/<name>: the whole log by the semi-synthetic protocol (slam::run_grid_slam, 8
+//    particles, data seed 1), once; counters: the mean translational and rotational relation error
+//    against the corrected poses over consecutive processed scans, CPU per processed scan, mean
+//    ESS / N and evaluations per particle and scan.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -30,7 +40,10 @@
 #include "implicit/core/share_dir.hpp"
 #include "implicit/robot/carmen.hpp"
 #include "implicit/robot/grid_mapping.hpp"
+#include "implicit/slam/grid/grid_proposals.hpp"
+#include "implicit/slam/grid/grid_slam_run.hpp"
 #include "implicit/slam/grid/map_update_gate.hpp"
+#include "implicit/slam/grid/scan_match.hpp"
 #include "implicit/slam/grid/tiled_grid.hpp"
 
 namespace {
@@ -219,8 +232,92 @@ void tile_size(benchmark::State& state) {
   }
 }
 
+void scan_match(benchmark::State& state, bool derivatives) {
+  const GridScene& s = grid_scene();
+  const slam::GridScanModel model(s.full, slam::ScanMatchParams{});
+  const slam::ScanMatchBeams beams = model.prepare(s.scans.back());
+  const Pose x = s.poses.back();
+  double value = 0.0;
+  for (auto _ : state) {
+    Vec<3> g = Vec<3>::Zero();
+    robot::Mat3 h = robot::Mat3::Zero(), gn = robot::Mat3::Zero();
+    value = derivatives ? model.negative_log_likelihood(beams, x, &g, &h, &gn)
+                        : model.negative_log_likelihood(beams, x, nullptr, nullptr, nullptr);
+    benchmark::DoNotOptimize(value);
+    benchmark::DoNotOptimize(h);
+  }
+  state.counters["beams"] = static_cast<double>(beams.size());
+}
+
+void proposal(benchmark::State& state, slam::GridProposalKind kind) {
+  const GridScene& s = grid_scene();
+  const slam::GridScanModel model(s.full, slam::ScanMatchParams{});
+  const slam::ScanMatchBeams beams = model.prepare(s.scans.back());
+  const robot::OdometryAlphas alphas{0.05, 0.05, 0.05, 0.05};
+  const robot::OdometryModel motion(alphas);
+  const Pose previous = s.poses[s.poses.size() - 2];
+  Rng data({.seed = 1, .purpose = purpose::kData});
+  const robot::OdometryDelta u =
+      robot::perturb_odometry(robot::between(previous, s.poses.back()), alphas, data);
+  const slam::GridProposalInput in{&motion, u, &model, &beams};
+  const auto p = slam::make_grid_proposal(kind);
+  std::uint64_t j = 0;
+  double evaluations = 0.0, calls = 0.0;
+  for (auto _ : state) {
+    Rng rng({.seed = 2, .index = j++, .purpose = purpose::kProposal});
+    Pose next;
+    slam::GridProposalStats st;
+    benchmark::DoNotOptimize(p->propose(in, previous, rng, next, st));
+    evaluations += st.evaluations;
+    calls += 1.0;
+  }
+  state.counters["evaluations"] = evaluations / std::max(1.0, calls);
+}
+
+void grid_slam_log(benchmark::State& state, slam::GridProposalKind kind) {
+  const std::filesystem::path file =
+      find_share_dir("data", "IMPLICIT_DATA_DIR") / "carmen" / "intel-corrected.log.gz";
+  const robot::CarmenLog log = robot::read_carmen(file);
+  slam::GridSlamRunOptions o;
+  o.proposal = kind;
+  slam::GridSlamRun run;
+  for (auto _ : state) run = slam::run_grid_slam(log, o);
+  state.counters["relation_t_m"] = run.relations.translation_mean;
+  state.counters["relation_r_deg"] = run.relations.rotation_mean_deg;
+  state.counters["cpu_ms_per_scan"] = 1e3 * run.cpu_seconds / static_cast<double>(run.processed);
+  state.counters["scans"] = static_cast<double>(run.processed);
+  state.counters["ess_over_n"] = run.mean_ess;
+  state.counters["evaluations"] = run.mean_evaluations;
+  state.counters["fallbacks"] = static_cast<double>(run.fallbacks);
+}
+
 }  // namespace
 
+BENCHMARK_CAPTURE(scan_match, value, false)->Name("ScanMatch/value")->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(scan_match, derivatives, true)
+    ->Name("ScanMatch/derivatives")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(proposal, bootstrap, slam::GridProposalKind::kBootstrap)
+    ->Name("Proposal/bootstrap")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(proposal, gmapping, slam::GridProposalKind::kScanMatch)
+    ->Name("Proposal/gmapping")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(proposal, implicit, slam::GridProposalKind::kImplicit)
+    ->Name("Proposal/implicit")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(grid_slam_log, bootstrap, slam::GridProposalKind::kBootstrap)
+    ->Name("GridSlam/bootstrap")
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(grid_slam_log, gmapping, slam::GridProposalKind::kScanMatch)
+    ->Name("GridSlam/gmapping")
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(grid_slam_log, implicit, slam::GridProposalKind::kImplicit)
+    ->Name("GridSlam/implicit")
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
 BENCHMARK(map_update_tiled)->Name("MapUpdate/tiled")->Unit(benchmark::kMillisecond);
 BENCHMARK(map_update_dense)->Name("MapUpdate/dense")->Unit(benchmark::kMillisecond);
 BENCHMARK(copy_grids)->Name("Copy")->Arg(30)->Arg(100)->Unit(benchmark::kMicrosecond);

@@ -16,6 +16,7 @@
 #include "implicit/robot/scan_simulation.hpp"
 #include "implicit/slam/grid/grid_proposals.hpp"
 #include "implicit/slam/grid/grid_slam.hpp"
+#include "implicit/slam/grid/grid_slam_run.hpp"
 #include "robot/laser_fixtures.hpp"
 
 namespace implicit::slam {
@@ -74,7 +75,8 @@ GridSlamOptions grid_slam_test_options() {
 
 // Mean position error of the best trajectory against the truth.
 double grid_slam_filter_drive(const GridSlamDrive& d, const GridSlamOptions& o,
-                     std::shared_ptr<const GridProposal> proposal, std::vector<GridSlamPose>* out) {
+                              std::shared_ptr<const GridProposal> proposal,
+                              std::vector<GridSlamPose>* out) {
   GridSlam filter(o, std::move(proposal));
   filter.initialize(d.truth[0], d.odometry[0], d.scans[0]);
   for (std::size_t k = 1; k < d.scans.size(); ++k) {
@@ -104,7 +106,8 @@ double grid_slam_recovery_error(std::shared_ptr<const GridProposal> proposal) {
     odometry_error += (d.odometry[k].head<2>() - d.truth[k].head<2>()).norm();
   odometry_error /= static_cast<double>(d.truth.size());
   EXPECT_GT(odometry_error, 2.0 * kGridSlamTolerance) << "the drive does not test the scans";
-  const double error = grid_slam_filter_drive(d, grid_slam_test_options(), std::move(proposal), nullptr);
+  const double error =
+      grid_slam_filter_drive(d, grid_slam_test_options(), std::move(proposal), nullptr);
   EXPECT_LT(error, odometry_error);
   return error;
 }
@@ -254,6 +257,40 @@ TEST(GridSlam, RefusesBadInputNamingIt) {
   // Refused before any change: the filter still steps.
   EXPECT_TRUE(filter.step(d.odometry[1], d.scans[1]).processed);
   EXPECT_EQ(filter.steps(), 1u);
+}
+
+// The runner on a log made of the simulated drive's scans and true poses (as a CARMEN log's
+// corrected poses): the relation errors against them, and the odometry's own, are scored.
+TEST(GridSlam, RunsALogByTheSemiSyntheticProtocol) {
+  const GridSlamDrive d = grid_slam_drive(25);
+  robot::CarmenLog log;
+  log.source = "simulated";
+  log.scans = d.scans;
+  log.laser_poses = d.truth;
+  for (std::size_t k = 0; k < log.scans.size(); ++k) log.scans[k].time = 0.5 * k;
+  GridSlamRunOptions o;
+  o.filter = grid_slam_test_options();
+  o.filter.alphas = {0.02, 0.02, 0.02, 0.02};
+  o.filter.gate.linear_update = 0.2;  // every scan of the drive (0.25 m or more apart)
+  o.proposal = parse_grid_proposal("implicit");
+  const GridSlamRun run = run_grid_slam(log, o);
+  EXPECT_EQ(run.processed, d.scans.size());
+  ASSERT_EQ(run.trajectory.size(), run.processed);
+  EXPECT_EQ(run.trajectory[3].time, 1.5);
+  EXPECT_EQ(run.relations.translation.size(), run.processed - 1);
+  // Dead reckoning's relation error is the odometry noise, 4 cm a step; the scans cut it (each
+  // pose is still a draw from its posterior, about 2 cm wide at 5 cm cells).
+  EXPECT_GT(run.odometry_relations.translation_mean, 0.03);
+  EXPECT_LT(run.relations.translation_mean, 0.8 * run.odometry_relations.translation_mean);
+  EXPECT_FALSE(run.map.empty());
+  EXPECT_EQ(run.failures, 0u);
+
+  EXPECT_NE(grid_slam_error([] { parse_grid_proposal("fastslam"); }).find("fastslam"),
+            std::string::npos);
+  EXPECT_NE(grid_slam_error([&] { run_grid_slam(robot::CarmenLog{}, o); }).find("scans"),
+            std::string::npos);
+  o.filter.particles = 0;
+  EXPECT_NE(grid_slam_error([&] { run_grid_slam(log, o); }).find("particles"), std::string::npos);
 }
 
 }  // namespace

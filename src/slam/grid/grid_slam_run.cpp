@@ -1,0 +1,113 @@
+#include "implicit/slam/grid/grid_slam_run.hpp"
+
+#include <ctime>
+#include <string>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/rng.hpp"
+
+namespace implicit::slam {
+
+std::string_view to_string(GridProposalKind kind) {
+  switch (kind) {
+    case GridProposalKind::kBootstrap:
+      return "bootstrap";
+    case GridProposalKind::kScanMatch:
+      return "gmapping";
+    case GridProposalKind::kImplicit:
+      return "implicit";
+  }
+  return "?";
+}
+
+GridProposalKind parse_grid_proposal(std::string_view name) {
+  for (GridProposalKind k :
+       {GridProposalKind::kBootstrap, GridProposalKind::kScanMatch, GridProposalKind::kImplicit})
+    if (name == to_string(k)) return k;
+  throw InvalidArgument("grid SLAM proposal: expected bootstrap, gmapping or implicit, got '" +
+                        std::string(name) + "'");
+}
+
+std::shared_ptr<const GridProposal> make_grid_proposal(GridProposalKind kind) {
+  switch (kind) {
+    case GridProposalKind::kBootstrap:
+      return std::make_shared<BootstrapGridProposal>();
+    case GridProposalKind::kScanMatch:
+      return std::make_shared<ScanMatchGridProposal>();
+    case GridProposalKind::kImplicit:
+      return std::make_shared<ImplicitGridProposal>();
+  }
+  throw InvalidArgument("grid SLAM proposal: unknown kind");
+}
+
+void GridSlamRunOptions::validate() const { filter.validate(); }
+
+GridSlamRun run_grid_slam(const robot::CarmenLog& log, const GridSlamRunOptions& options) {
+  options.validate();
+  require(!log.scans.empty() && log.scans.size() == log.laser_poses.size(),
+          "run_grid_slam: {}: expected laser scans with their poses, got {} scans and {} poses",
+          log.source, log.scans.size(), log.laser_poses.size());
+  const std::size_t n =
+      options.max_scans > 0 ? std::min(options.max_scans, log.scans.size()) : log.scans.size();
+  // The protocol's updates: where the reference moved or turned by the gate since the last one;
+  // the odometry between them is the reference increment perturbed by the alphas.
+  std::vector<std::size_t> used{0};
+  for (std::size_t k = 1; k < n; ++k)
+    if (options.filter.gate.due(log.laser_poses[used.back()], log.laser_poses[k]))
+      used.push_back(k);
+  std::vector<robot::Pose> odometry{log.laser_poses[0]};
+  for (std::size_t i = 1; i < used.size(); ++i) {
+    Rng rng({.seed = options.data_seed, .step = i, .purpose = purpose::kData});
+    const robot::Pose inc = robot::between(log.laser_poses[used[i - 1]], log.laser_poses[used[i]]);
+    odometry.push_back(
+        robot::compose(odometry.back(), robot::perturb_odometry(inc, options.filter.alphas, rng)));
+  }
+  GridSlamOptions fo = options.filter;
+  fo.gate = MapUpdateGate{0.0, 0.0};  // the protocol chose the scans
+  GridSlam filter(fo, make_grid_proposal(options.proposal));
+  GridSlamRun run;
+  const std::clock_t start = std::clock();
+  filter.initialize(log.laser_poses[0], odometry[0], log.scans[0]);
+  double ess = 0.0, evaluations = 0.0;
+  for (std::size_t i = 1; i < used.size(); ++i) {
+    const GridSlamStep s = filter.step(odometry[i], log.scans[used[i]]);
+    ess += s.ess / static_cast<double>(fo.particles);
+    evaluations += s.mean_evaluations;
+    run.resamplings += s.resampled;
+    run.fallbacks += static_cast<std::size_t>(s.fallbacks);
+    run.failures += static_cast<std::size_t>(s.failures);
+  }
+  run.cpu_seconds = static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;
+  run.processed = used.size();
+  const double steps = std::max<double>(1.0, static_cast<double>(used.size() - 1));
+  run.mean_ess = ess / steps;
+  run.mean_evaluations = evaluations / steps;
+  run.trajectory = filter.best_trajectory();
+  for (std::size_t k : used) run.reference.push_back({log.scans[k].time, log.laser_poses[k]});
+  run.map = filter.best_map().to_occupancy_grid();
+  // Relations between consecutive processed scans, matched by their index (the bundled logs'
+  // scan times are not always increasing: Intel's go back by 0.11 s once).
+  std::vector<double> times;
+  std::vector<robot::Pose> poses;
+  std::vector<robot::Relation> relations;
+  for (std::size_t i = 0; i < run.trajectory.size(); ++i) {
+    times.push_back(static_cast<double>(i));
+    poses.push_back(run.trajectory[i].pose);
+    if (i == 0) continue;
+    robot::Relation r;
+    r.t1 = static_cast<double>(i - 1);
+    r.t2 = static_cast<double>(i);
+    r.delta = robot::Pose3::from_se2(run.reference[i - 1].pose).inverse() *
+              robot::Pose3::from_se2(run.reference[i].pose);
+    relations.push_back(r);
+  }
+  if (!relations.empty()) {
+    run.relations = robot::relation_errors(robot::Trajectory::from_se2(times, poses), relations,
+                                           {.max_diff = 0.1});
+    run.odometry_relations = robot::relation_errors(robot::Trajectory::from_se2(times, odometry),
+                                                    relations, {.max_diff = 0.1});
+  }
+  return run;
+}
+
+}  // namespace implicit::slam
