@@ -14,6 +14,7 @@ namespace implicit::app {
 
 void add_laser_options(CLI::App& sub, LaserCommand& l) {
   auto& s = l.settings;
+  add_bag_flags(sub, l.bag);
   sub.add_option("--sensor", l.sensor,
                  "landmark: range-bearing detections of point landmarks (Car Park, robot logs); "
                  "laser: 2-D laser scans on an occupancy grid (--data a CARMEN log, or a robot "
@@ -155,8 +156,10 @@ void run_laser_mcl_command(const MclSettings& shared, const std::string& map_fil
   auto& s = l.settings;
   require(!shared.data_dir.empty(),
           "mcl --sensor laser: expected --data naming a CARMEN laser log (e.g. "
-          "data/carmen/intel-corrected.log.gz) or a robot log with 'laser' records");
+          "data/carmen/intel-corrected.log.gz), a robot log with 'laser' records or a ROS bag");
   s.data.data = shared.data_dir;
+  require_bag_for_flags(l.bag, shared.data_dir, "mcl --sensor laser");
+  s.data.bag = l.bag.options;
   s.data.map = map_file;
   s.proposal = experiments::parse_proposal(shared.method);
   s.implicit_map =

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "bag_flags.hpp"
 #include "context.hpp"
 #include "experiments.hpp"
 #include "experiments/laser_mcl.hpp"
@@ -21,6 +22,7 @@ struct LaserCommand {
   std::vector<double> alphas, filter_alphas;
   std::string interpolation = "bicubic", aggregation = "product";
   std::string laser_model = "likelihood-field";
+  BagFlags bag;  ///< a ROS bag as --data: its topics and frames
   std::string trajectory;  ///< TUM file of the first run's estimate
 };
 

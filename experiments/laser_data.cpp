@@ -9,6 +9,7 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/robot/bag.hpp"
 #include "implicit/robot/carmen.hpp"
 #include "implicit/robot/csv_table.hpp"
 #include "implicit/robot/grid_mapping.hpp"
@@ -212,6 +213,8 @@ LaserDataset load_carmen(const LaserDataOptions& options, const robot::CarmenLog
 
 LaserDataset load_laser_dataset(const LaserDataOptions& options) {
   options.validate();
+  if (robot::is_bag(options.data))
+    return load_carmen(options, robot::read_bag_laser_log(options.data, options.bag).log);
   // The format from the content (any name, gzip or not): a robot log's first record is one of
   // its lower-case kinds, a CARMEN log's an upper-case message name.
   const std::string text = robot::read_text_file(options.data);

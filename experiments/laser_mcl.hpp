@@ -34,6 +34,7 @@
 #include "implicit/filter/kld.hpp"
 #include "implicit/filter/proposals.hpp"
 #include "implicit/filter/recovery.hpp"
+#include "implicit/robot/bag.hpp"
 #include "implicit/robot/beam_model.hpp"
 #include "implicit/robot/laser_scan.hpp"
 #include "implicit/robot/likelihood_field.hpp"
@@ -83,8 +84,10 @@ struct LaserDataset {
 
 struct LaserDataOptions {
   /// A CARMEN log or a robot log (log_format.hpp) with `laser` and `odometry` records; plain or
-  /// gzip, the format told from the content (robot::is_robot_log).
+  /// gzip, the format told from the content (robot::is_robot_log). Or a ROS bag (robot/bag.hpp),
+  /// read as the CARMEN log it makes: its odometry is the reference.
   std::filesystem::path data;
+  robot::BagOptions bag;  ///< a ROS bag's topics and frames
   /// A map_server YAML; empty: a robot log's `map` record, or built from a CARMEN log's reference
   /// poses.
   std::filesystem::path map;

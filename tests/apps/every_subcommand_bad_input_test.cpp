@@ -47,6 +47,13 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
   static const std::map<std::string, std::vector<SubcommandBadInput>> rows = {
       {"arm",
        {{"arm --estimator nope", 2, {"--estimator", "nope"}}, {"arm --seed -1", 2, {"--seed"}}}},
+      {"convert",
+       {{"convert --out DIR/x.log", 2, {"--data"}},
+        {"convert --data DIR/gone.mcap --out DIR/x.log", 1, {"gone.mcap"}},
+        {"convert --data DIR/gone.mcap --out DIR/x.log --scan-topic ''", 2, {"--scan-topic"}},
+        {"convert --data DIR/gone.mcap --out DIR/x.log --odom-topic ''", 2, {"--odom-topic"}},
+        {"convert --data DIR/gone.mcap --out DIR/x.log --base-frame ''", 2, {"--base-frame"}},
+        {"convert --data DIR/gone.mcap --out DIR/x.log --laser-frame ''", 2, {"--laser-frame"}}}},
       {"eval",
        {{"eval", 2, {"--est"}},
         {"eval --ref DIR/gone.tum --est DIR/gone.tum", 1, {"gone.tum"}},
@@ -62,7 +69,13 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
        {{"mcl --particles 0", 2, {"--particles"}},
         {"mcl --data DIR/gone.log", 1, {"gone.log"}},
         {"mcl --label-gate -1", 2, {"--label-gate"}},
-        {"mcl --init nowhere", 2, {"--init", "nowhere"}}}},
+        {"mcl --init nowhere", 2, {"--init", "nowhere"}},
+        {"mcl --sensor laser --data DIR/gone.mcap --scan-topic ''", 2, {"--scan-topic"}},
+        {"mcl --sensor laser --data DIR/gone.mcap --odom-topic ''", 2, {"--odom-topic"}},
+        {"mcl --sensor laser --data DIR/gone.mcap --base-frame b",
+         1,
+         {"--base-frame", "gone.mcap"}},
+        {"mcl --sensor laser --data DIR/gone.mcap --laser-frame ''", 2, {"--laser-frame"}}}},
       {"proposal-gain",
        {{"proposal-gain --ratio-dt 0", 2, {"--ratio-dt"}},
         {"proposal-gain --ratios nan", 2, {"--ratios"}}}},
@@ -84,6 +97,7 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
 
 // The subcommand with its required flags (to files that do not exist: a flag error comes first).
 std::string every_subcommand_required(const std::string& name) {
+  if (name == "convert") return "convert --data DIR/gone.mcap --out DIR/x.log";
   if (name == "eval") return "eval --est DIR/gone.tum";
   if (name == "map") return "map --data DIR/gone.log --out DIR/m.yaml";
   if (name == "simulate") return "simulate --out DIR/s.log";
