@@ -45,7 +45,7 @@ TEST(BagCli, BagAndItsConvertedLogGiveTheSameRun) {
     ASSERT_EQ(c.code, 0) << c.err;
     const auto j = nlohmann::json::parse(c.out);
     EXPECT_EQ(j["scans"], 30);
-    EXPECT_EQ(j["odometry"], 51);
+    EXPECT_EQ(j["odometry"], 31);
     EXPECT_EQ(j["base_frame"], "base_footprint");
     EXPECT_EQ(j["laser_frame"], "laser");
     EXPECT_TRUE(j["mount_from_tf"].get<bool>());

@@ -1,5 +1,5 @@
 // The ROS bag readers against fixtures written by independent tools (tests/data/bags/generate.mjs:
-// @mcap/core, sql.js, @foxglove/rosmsg2-serialization) from the first 151 laser messages of the
+// @mcap/core, sql.js, @foxglove/rosmsg2-serialization) from the first 31 laser messages of the
 // Intel log: every value read is compared with the value written, recomputed here from the log.
 #include <gtest/gtest.h>
 
@@ -24,17 +24,19 @@ namespace {
 const std::filesystem::path kBagDir =
     std::filesystem::path(IMPLICIT_SOURCE_DIR) / "tests/data/bags";
 
-// The generator's choices (generate.mjs): scan k is the log's laser message 5k, odometry message j
-// its message 3j; the static transforms base_footprint -> base_link -> laser.
-constexpr std::size_t kBagScans = 30, kBagScanEvery = 5, kBagOdometry = 51, kBagOdomEvery = 3;
+// The generator's choices (generate.mjs): scan k is the log's laser message k stamped 1 ms after
+// it, odometry message j the pose of its message j at its time; the static transforms
+// base_footprint -> base_link -> laser.
+constexpr std::size_t kBagScans = 30, kBagOdometry = 31;
+constexpr double kBagScanDelay = 0.001;  // [s]
 
-/// The first 151 laser messages of the Intel log (the generator's source).
+/// The first 31 laser messages of the Intel log (the generator's source).
 const CarmenLog& bag_source_log() {
   static const CarmenLog log = [] {
     const std::string text = read_text_file(std::filesystem::path(IMPLICIT_SOURCE_DIR) /
                                             "data/carmen/intel-corrected.log.gz");
     std::size_t pos = 0, lasers = 0;
-    while (lasers < 151 && (pos = text.find("\nFLASER ", pos)) != std::string::npos) {
+    while (lasers < 31 && (pos = text.find("\nFLASER ", pos)) != std::string::npos) {
       ++lasers;
       ++pos;
     }
@@ -83,7 +85,7 @@ TEST(Bag, EveryFormatGivesTheValuesWritten) {
     const CarmenLog& log = b.log;
     ASSERT_EQ(log.odometry.size(), kBagOdometry);
     for (std::size_t j = 0; j < kBagOdometry; ++j) {
-      const std::size_t i = j * kBagOdomEvery;
+      const std::size_t i = j;
       EXPECT_EQ(log.odometry[j].time, bag_stamp(intel.scans[i].time));
       EXPECT_EQ(log.odometry[j].pose(0), intel.laser_poses[i](0));
       EXPECT_EQ(log.odometry[j].pose(1), intel.laser_poses[i](1));
@@ -94,10 +96,10 @@ TEST(Bag, EveryFormatGivesTheValuesWritten) {
     }
     ASSERT_EQ(log.scans.size(), kBagScans);
     for (std::size_t k = 0; k < kBagScans; ++k) {
-      const std::size_t i = k * kBagScanEvery;
+      const std::size_t i = k;
       const LaserScan& s = log.scans[k];
       EXPECT_EQ(log.scan_lines[k], k);
-      EXPECT_EQ(s.time, bag_stamp(intel.scans[i].time));
+      EXPECT_EQ(s.time, bag_stamp(intel.scans[i].time + kBagScanDelay));
       EXPECT_EQ(s.angle_min, static_cast<double>(static_cast<float>(-kPi / 2)));
       EXPECT_EQ(s.angle_increment, static_cast<double>(static_cast<float>(kPi / 180)));
       EXPECT_EQ(s.range_min, 0.0);
@@ -109,18 +111,14 @@ TEST(Bag, EveryFormatGivesTheValuesWritten) {
         const bool none = (k == 1 && r < 2) || written > 80.0;
         EXPECT_EQ(s.ranges[r], none ? 80.0 : written) << "scan " << k << " beam " << r;
       }
-      // The odometry pose at the scan's stamp: recorded there (every third scan), else linear
-      // between the two recorded around it.
-      const std::size_t a = i / kBagOdomEvery * kBagOdomEvery, b = a + kBagOdomEvery;
-      const Pose& pa = intel.laser_poses[a];
-      Pose expected = pa;
-      if (i != a) {
-        const Pose& pb = intel.laser_poses[b];
-        const double ta = bag_stamp(intel.scans[a].time), tb = bag_stamp(intel.scans[b].time);
-        const double w = (s.time - ta) / (tb - ta);
-        expected = pa + w * (pb - pa);
-        expected(2) = pa(2) + w * wrap_angle(pb(2) - pa(2));
-      }
+      // The odometry pose at the scan's stamp: linear between the two recorded around it.
+      const Pose& pa = intel.laser_poses[i];
+      const Pose& pb = intel.laser_poses[i + 1];
+      const double ta = bag_stamp(intel.scans[i].time), tb = bag_stamp(intel.scans[i + 1].time);
+      const double w = (s.time - ta) / (tb - ta);
+      ASSERT_GT(w, 0.0);
+      Pose expected = pa + w * (pb - pa);
+      expected(2) = pa(2) + w * wrap_angle(pb(2) - pa(2));
       EXPECT_NEAR((log.odometry_poses[k] - expected).norm(), 0.0, 1e-12) << "scan " << k;
       const Pose laser = compose(log.odometry_poses[k], Pose(0.1, 0.02, 0.05));
       EXPECT_NEAR((log.laser_poses[k] - laser).norm(), 0.0, 1e-12) << "scan " << k;
@@ -146,7 +144,7 @@ TEST(Bag, TopicsTypesCountsAndTransformsAsWritten) {
   const BagContents bag = read_bag(kBagDir / "intel-lz4.mcap");
   EXPECT_EQ(bag.format, "MCAP");
   const std::vector<std::pair<std::string, std::size_t>> counts = {
-      {"/scan", 30}, {"/odom", 51}, {"/tf", 51}, {"/tf_static", 1}, {"/ground_truth", 30}};
+      {"/scan", 30}, {"/odom", 31}, {"/tf", 31}, {"/tf_static", 1}, {"/ground_truth", 30}};
   for (const auto& [name, n] : counts) {
     const std::size_t t = bag.find_topic(name);
     ASSERT_LT(t, bag.topics.size()) << name;
@@ -187,9 +185,8 @@ TEST(Bag, PoseStampedOdometryAndChosenFrames) {
   EXPECT_NEAR(b.mount.x, 0.1, 1e-15);
   ASSERT_EQ(b.log.scans.size(), kBagScans);
   for (std::size_t k = 0; k < kBagScans; ++k) {
-    EXPECT_EQ(b.log.odometry_poses[k](0), intel.laser_poses[k * kBagScanEvery](0));
-    EXPECT_NEAR(wrap_angle(b.log.odometry_poses[k](2) - intel.laser_poses[k * kBagScanEvery](2)),
-                0.0, 1e-14);
+    EXPECT_EQ(b.log.odometry_poses[k](0), intel.laser_poses[k](0));
+    EXPECT_NEAR(wrap_angle(b.log.odometry_poses[k](2) - intel.laser_poses[k](2)), 0.0, 1e-14);
   }
   // The laser as the robot's frame: no transform between a frame and itself.
   o.base_frame = "laser";

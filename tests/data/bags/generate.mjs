@@ -1,7 +1,7 @@
 // Writes the ROS bag fixtures of this folder with writers that are not the project's: MCAP files
 // with @mcap/core's McapWriter, rosbag2 SQLite files with sql.js, messages serialised by
-// @foxglove/rosmsg2-serialization (CDR). The data: 30 scans and 51 odometry poses from the first
-// 151 laser messages of data/carmen/intel-corrected.log.gz (README.md in this folder says which
+// @foxglove/rosmsg2-serialization (CDR). The data: 30 scans and 31 odometry poses from the first
+// 31 laser messages of data/carmen/intel-corrected.log.gz (README.md in this folder says which
 // and how; tests/robot/bag_test.cpp checks the readers against the same values).
 //
 //   cd tests/data/bags && npm ci && node generate.mjs
@@ -21,7 +21,9 @@ const here = path.dirname(fileURLToPath(import.meta.url));
 const root = path.resolve(here, "../../..");
 
 // ---- the data -----------------------------------------------------------------------------------
-const SCANS = 30, SCAN_EVERY = 5, ODOM_EVERY = 3, ODOMS = 51;
+// Scan k is laser message k stamped 1 ms after it; odometry j the pose of laser message j, at its
+// time: each scan's pose is interpolated between two odometry messages.
+const SCANS = 30, ODOMS = 31, SCAN_DELAY = 0.001;
 const text = zlib.gunzipSync(fs.readFileSync(path.join(root, "data/carmen/intel-corrected.log.gz")));
 const flaser = text.toString("latin1").split("\n").filter((l) => l.startsWith("FLASER "))
   .map((l) => {
@@ -86,13 +88,13 @@ const tf = (s, list) => ({
   })),
 });
 
-function intelMessages({ scanTime = (k) => flaser[k * SCAN_EVERY].time } = {}) {
+function intelMessages({ scanTime = (k) => flaser[k].time + SCAN_DELAY } = {}) {
   const out = [];
   const first = stamp(flaser[0].time);
   out.push({ topic: "/tf_static", type: "tf2_msgs/msg/TFMessage", time: ns(first),
              msg: tf(first, STATIC_TF) });
   for (let j = 0; j < ODOMS; ++j) {
-    const r = flaser[j * ODOM_EVERY];
+    const r = flaser[j];
     const s = stamp(r.time);
     const pose = { position: { x: r.pose[0], y: r.pose[1], z: 0 }, orientation: quat(r.pose[2]) };
     out.push({ topic: "/odom", type: "nav_msgs/msg/Odometry", time: ns(s) + 1000n, msg: {
@@ -106,8 +108,8 @@ function intelMessages({ scanTime = (k) => flaser[k * SCAN_EVERY].time } = {}) {
     ]) });
   }
   for (let k = 0; k < SCANS; ++k) {
-    const r = flaser[k * SCAN_EVERY];
-    const s = stamp(scanTime(k)), received = stamp(r.time);
+    const r = flaser[k];
+    const s = stamp(scanTime(k)), received = stamp(r.time + SCAN_DELAY);
     const ranges = r.ranges.slice();
     if (k === 1) { ranges[0] = NaN; ranges[1] = Infinity; }  // REP 117: invalid, no return
     out.push({ topic: "/scan", type: "sensor_msgs/msg/LaserScan", time: ns(received) + 3000n, msg: {
@@ -208,7 +210,7 @@ await writeMcap("intel-plain.mcap", messages, { chunkSize: 16384, useSummaryOffs
   repeatChannels: false });
 await writeDb3("intel-rosbag2", messages);
 // Scan 20 stamped before scan 19: a time that runs backwards.
-const back = intelMessages({ scanTime: (k) => flaser[(k === 20 ? 18 : k) * SCAN_EVERY].time });
+const back = intelMessages({ scanTime: (k) => flaser[k === 20 ? 18 : k].time + SCAN_DELAY });
 await writeMcap("backwards.mcap", back.filter((m) => m.topic === "/scan" || m.topic === "/odom"),
                 { compressChunk: (d) => ({ compression: "zstd", compressedData: zstd.compress(d, 19) }) });
 console.log("wrote", fs.readdirSync(here).filter((f) => !f.includes("node_modules")).join(" "));
