@@ -146,7 +146,8 @@ TEST(GridSlam, ResultsDoNotDependOnTheThreadCount) {
 
 // One step of one particle on a coarse map (0.2 m cells, 4 beams): the posterior is wide enough
 // for a 3-D quadrature of Z = integral N(x; f, Sigma1) p(z | x, map) dx, and the mean of the
-// implicit (and bootstrap) weights must match it within 4 standard errors.
+// implicit weights (several starts; one coarse-to-fine start) and of the bootstrap weights must
+// match it within 4 standard errors.
 TEST(GridSlam, ImplicitWeightsAreExact) {
   const GridSlamDrive d = grid_slam_drive(2);
   robot::GridMappingOptions mo;
@@ -183,6 +184,8 @@ TEST(GridSlam, ImplicitWeightsAreExact) {
   z *= std::pow(h, 3) / std::pow(2.0 * kPi, 1.5);
   for (const std::shared_ptr<const GridProposal>& proposal :
        {std::shared_ptr<const GridProposal>(std::make_shared<ImplicitGridProposal>()),
+        std::shared_ptr<const GridProposal>(std::make_shared<ImplicitGridProposal>(
+            ImplicitGridOptions{.coarse = {.coarse_smoothing = 4}, .starts = 1})),
         std::shared_ptr<const GridProposal>(std::make_shared<BootstrapGridProposal>())}) {
     const int samples = 2000;
     double sum = 0.0, sum2 = 0.0;
@@ -238,6 +241,14 @@ TEST(GridSlam, RefusesBadInputNamingIt) {
   ScanMatchProposalOptions so;
   so.step(2) = 0.0;
   EXPECT_NE(grid_slam_error([&] { ScanMatchGridProposal p(so); }).find("step"), std::string::npos);
+  so = {};
+  so.coarse.coarse_smoothing = 9;
+  EXPECT_NE(grid_slam_error([&] { ScanMatchGridProposal p(so); }).find("coarse_smoothing"),
+            std::string::npos);
+  EXPECT_NE(grid_slam_error([] {
+              ImplicitGridProposal p(ImplicitGridOptions{.coarse = {}, .starts = 0});
+            }).find("starts"),
+            std::string::npos);
 
   GridSlam filter(grid_slam_test_options(), proposal);
   EXPECT_NE(grid_slam_error([&] { filter.step(d.odometry[1], d.scans[1]); }).find("initialize"),

@@ -54,7 +54,32 @@ double grid_log_motion_density(const robot::Pose& x, const robot::Pose& f,
   return -1.5 * kLog2Pi - sigma1.log_det_L() - 0.5 * eta.squaredNorm();
 }
 
+// The coarse stage of coarse to fine (CoarseStartOptions): Newton on the objective make(model)
+// with the likelihood smoothed over `coarse` cells, from `start`; its minimum, or `start` when it
+// has none.
+template <typename MakeObjective>
+robot::Pose grid_coarse_start(const GridProposalInput& in, int coarse, const robot::Pose& start,
+                              MakeObjective make, GridProposalStats& st) {
+  if (coarse <= in.scan->params().smoothing) return start;
+  ScanMatchParams p = in.scan->params();
+  p.smoothing = coarse;
+  const GridScanModel model = GridScanModel::unchecked(in.scan->map(), p, in.scan->mount());
+  const auto objective = make(model);
+  NewtonOptions o = grid_newton_options();
+  o.decrement_tolerance = 1e-1;  // a start, not the centre: the fine stage refines it
+  o.max_iterations = 10;
+  const auto nr = newton_minimize<SmallFactor<3>>(objective, start, o);
+  st.evaluations += nr.evaluations;
+  return std::isfinite(nr.value) && nr.x.allFinite() ? nr.x : start;
+}
+
 }  // namespace
+
+void CoarseStartOptions::validate() const {
+  require(coarse_smoothing >= 0 && coarse_smoothing <= ScanMatchParams::kMaxSmoothing,
+          "CoarseStartOptions: expected coarse_smoothing in [0, {}] cells, got {}",
+          ScanMatchParams::kMaxSmoothing, coarse_smoothing);
+}
 
 // An exact Hessian converges quadratically near the mode, so a full step below 1e-5 (m, rad) ends
 // Newton (the next would be ~1e-10); a decrement g^T H^-1 g below 1e-3 is a centre within about
@@ -117,6 +142,7 @@ void ScanMatchProposalOptions::validate() const {
           "ScanMatchProposalOptions: expected step (x [m], y [m], heading [rad]) finite and > 0, "
           "got ({}, {}, {})",
           step(0), step(1), step(2));
+  coarse.validate();
   require(match_radius.allFinite() && (match_radius.array() > 0).all(),
           "ScanMatchProposalOptions: expected match_radius (x [m], y [m], heading [rad]) finite "
           "and > 0, got ({}, {}, {})",
@@ -138,9 +164,15 @@ double ScanMatchGridProposal::propose(const GridProposalInput& in, const robot::
   const robot::Pose start = f + sigma1.matrixL() * eta;
   // The scan-match mode near the motion sample (the proximal term's matrix is SPD, so the
   // Gauss-Newton fallback always factors).
-  const GridScanMatchObjective match{in.scan, in.beams, start,
-                                     options_.match_radius.cwiseAbs2().cwiseInverse()};
-  const auto nr = newton_minimize<SmallFactor<3>>(match, start, grid_newton_options());
+  const Vec<3> precision = options_.match_radius.cwiseAbs2().cwiseInverse();
+  const robot::Pose begin = grid_coarse_start(
+      in, options_.coarse.coarse_smoothing, start,
+      [&](const GridScanModel& coarse) {
+        return GridScanMatchObjective{&coarse, in.beams, start, precision};
+      },
+      st);
+  const GridScanMatchObjective match{in.scan, in.beams, start, precision};
+  const auto nr = newton_minimize<SmallFactor<3>>(match, begin, grid_newton_options());
   st.evaluations += nr.evaluations;
   robot::Pose mode = start;
   if (std::isfinite(nr.value) && nr.x.allFinite())
@@ -188,6 +220,16 @@ double ScanMatchGridProposal::propose(const GridProposalInput& in, const robot::
   return top + std::log(sum);
 }
 
+void ImplicitGridOptions::validate() const {
+  coarse.validate();
+  require(starts >= 1 && starts <= 64, "ImplicitGridOptions: expected starts in [1, 64], got {}",
+          starts);
+}
+
+ImplicitGridProposal::ImplicitGridProposal(const ImplicitGridOptions& options) : options_(options) {
+  options_.validate();
+}
+
 double ImplicitGridProposal::propose(const GridProposalInput& in, const robot::Pose& previous,
                                      Rng& rng, robot::Pose& next, GridProposalStats& st) const {
   robot::Pose f;
@@ -195,8 +237,26 @@ double ImplicitGridProposal::propose(const GridProposalInput& in, const robot::P
   if (!grid_predict(in, previous, f, sigma1, next, st)) return kGridNegInf;
   const Vec<3> xi = rng.normal_vector<3>();
   const GridPoseObjective obj(*in.scan, *in.beams, f, sigma1);
-  const auto nr = newton_minimize<SmallFactor<3>>(obj, f, grid_newton_options());
-  st.evaluations += nr.evaluations + 1;  // and F at the sample
+  NewtonMinimum<SmallFactor<3>> nr;
+  for (int k = 0; k < options_.starts; ++k) {
+    robot::Pose start = f;
+    if (k > 0) {
+      const Vec<3> eta = rng.normal_vector<3>();
+      start = f + sigma1.matrixL() * eta;
+    }
+    const robot::Pose begin = grid_coarse_start(
+        in, options_.coarse.coarse_smoothing, start,
+        [&](const GridScanModel& coarse) {
+          return GridPoseObjective(coarse, *in.beams, f, sigma1);
+        },
+        st);
+    auto other = newton_minimize<SmallFactor<3>>(obj, begin, grid_newton_options());
+    st.evaluations += other.evaluations;
+    if (k == 0 || (other.factor_ok && std::isfinite(other.value) &&
+                   (!nr.factor_ok || !std::isfinite(nr.value) || other.value < nr.value)))
+      nr = std::move(other);
+  }
+  ++st.evaluations;  // F at the sample
   st.fallback = st.fallback || !nr.exact_factor;
   const bool usable = nr.factor_ok && nr.status != MinimizeStatus::kNonFinite &&
                       std::isfinite(nr.value) && std::isfinite(nr.factor.log_det_L());

@@ -28,19 +28,25 @@ GridProposalKind parse_grid_proposal(std::string_view name) {
                         std::string(name) + "'");
 }
 
-std::shared_ptr<const GridProposal> make_grid_proposal(GridProposalKind kind) {
+std::shared_ptr<const GridProposal> make_grid_proposal(GridProposalKind kind,
+                                                       const ImplicitGridOptions& implicit,
+                                                       const ScanMatchProposalOptions& scan_match) {
   switch (kind) {
     case GridProposalKind::kBootstrap:
       return std::make_shared<BootstrapGridProposal>();
     case GridProposalKind::kScanMatch:
-      return std::make_shared<ScanMatchGridProposal>();
+      return std::make_shared<ScanMatchGridProposal>(scan_match);
     case GridProposalKind::kImplicit:
-      return std::make_shared<ImplicitGridProposal>();
+      return std::make_shared<ImplicitGridProposal>(implicit);
   }
   throw InvalidArgument("grid SLAM proposal: unknown kind");
 }
 
-void GridSlamRunOptions::validate() const { filter.validate(); }
+void GridSlamRunOptions::validate() const {
+  filter.validate();
+  implicit.validate();
+  scan_match.validate();
+}
 
 GridSlamRun run_grid_slam(const robot::CarmenLog& log, const GridSlamRunOptions& options) {
   options.validate();
@@ -64,7 +70,7 @@ GridSlamRun run_grid_slam(const robot::CarmenLog& log, const GridSlamRunOptions&
   }
   GridSlamOptions fo = options.filter;
   fo.gate = MapUpdateGate{0.0, 0.0};  // the protocol chose the scans
-  GridSlam filter(fo, make_grid_proposal(options.proposal));
+  GridSlam filter(fo, make_grid_proposal(options.proposal, options.implicit, options.scan_match));
   GridSlamRun run;
   const std::clock_t start = std::clock();
   filter.initialize(log.laser_poses[0], odometry[0], log.scans[0]);

@@ -27,7 +27,10 @@ enum class GridProposalKind { kBootstrap, kScanMatch, kImplicit };
 std::string_view to_string(GridProposalKind kind);
 /// "bootstrap", "gmapping" or "implicit"; throws InvalidArgument otherwise.
 GridProposalKind parse_grid_proposal(std::string_view name);
-std::shared_ptr<const GridProposal> make_grid_proposal(GridProposalKind kind);
+/// The proposal of that kind with the given options (the other kinds' are not used).
+std::shared_ptr<const GridProposal> make_grid_proposal(
+    GridProposalKind kind, const ImplicitGridOptions& implicit = {},
+    const ScanMatchProposalOptions& scan_match = {});
 
 struct GridSlamRunOptions {
   /// The filter; its gate is the protocol's (applied to the reference poses) and its alphas
@@ -40,6 +43,8 @@ struct GridSlamRunOptions {
     return o;
   }();
   GridProposalKind proposal = GridProposalKind::kImplicit;
+  ImplicitGridOptions implicit;
+  ScanMatchProposalOptions scan_match;
   std::uint64_t data_seed = 1;  ///< the odometry's noise: stream (data_seed, scan, 0, data)
   std::size_t max_scans = 0;    ///< 0: every scan of the log; else the first max_scans
   void validate() const;

@@ -61,6 +61,8 @@ class GridScanModel {
                                  const robot::LaserMount& mount);
 
   const ScanMatchParams& params() const { return params_; }
+  const TiledLogOddsGrid& map() const { return *map_; }
+  const robot::LaserMount& mount() const { return mount_; }
 
   /// The beams used of `scan` (validated; `where` names it in errors). A scan without a hit
   /// gives no beams: its likelihood is 1.
