@@ -1,6 +1,7 @@
 // The ROS bag readers against fixtures written by independent tools (tests/data/bags/generate.mjs:
-// @mcap/core, sql.js, @foxglove/rosmsg2-serialization) from the first 31 laser messages of the
-// Intel log: every value read is compared with the value written, recomputed here from the log.
+// @mcap/core, sql.js, @foxglove/rosmsg2-serialization and -serialization; the ROS 1 container
+// written by the generator and read back by @foxglove/rosbag) from the first 31 laser messages of
+// the Intel log: every value read is compared with the value written, recomputed here from the log.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -67,8 +68,14 @@ std::string bag_error(const std::function<void()>& f) {
   return "no error";
 }
 
-const std::vector<std::string> kBagFiles = {"intel-zstd.mcap", "intel-lz4.mcap", "intel-plain.mcap",
-                                            "intel-rosbag2", "intel-rosbag2/intel-rosbag2_0.db3"};
+const std::vector<std::string> kBagFiles = {"intel-zstd.mcap",
+                                            "intel-lz4.mcap",
+                                            "intel-plain.mcap",
+                                            "intel-rosbag2",
+                                            "intel-rosbag2/intel-rosbag2_0.db3",
+                                            "intel.bag",
+                                            "intel-lz4.bag",
+                                            "intel-bz2.bag"};
 
 TEST(Bag, EveryFormatGivesTheValuesWritten) {
   const CarmenLog& intel = bag_source_log();
@@ -258,8 +265,9 @@ TEST(Bag, TimeRunningBackwardsNamesTopicAndMessage) {
 }
 
 TEST(Bag, TruncatedOrCorruptFilesAreRefused) {
-  for (const std::string file : {"intel-zstd.mcap", "intel-lz4.mcap", "intel-plain.mcap",
-                                 "intel-rosbag2/intel-rosbag2_0.db3"}) {
+  for (const std::string file :
+       {"intel-zstd.mcap", "intel-lz4.mcap", "intel-plain.mcap",
+        "intel-rosbag2/intel-rosbag2_0.db3", "intel.bag", "intel-lz4.bag", "intel-bz2.bag"}) {
     const std::string bytes = bag_bytes(file);
     ASSERT_GT(bytes.size(), 1000u);
     // Cut anywhere, and one byte changed inside the first chunk (or the database's pages).

@@ -1,6 +1,7 @@
 // Writes the ROS bag fixtures of this folder with writers that are not the project's: MCAP files
 // with @mcap/core's McapWriter, rosbag2 SQLite files with sql.js, messages serialised by
-// @foxglove/rosmsg2-serialization (CDR). The data: 30 scans and 31 odometry poses from the first
+// @foxglove/rosmsg2-serialization (CDR) and @foxglove/rosmsg-serialization (ROS 1); ROS 1 bags
+// by their specification, read back by @foxglove/rosbag before they are kept. The data: 30 scans and 31 odometry poses from the first
 // 31 laser messages of data/carmen/intel-corrected.log.gz (README.md in this folder says which
 // and how; tests/robot/bag_test.cpp checks the readers against the same values).
 //
@@ -11,8 +12,14 @@ import zlib from "node:zlib";
 import { fileURLToPath } from "node:url";
 
 import { McapWriter } from "@mcap/core";
-import { parse } from "@foxglove/rosmsg";
+import { md5, parse } from "@foxglove/rosmsg";
+import { MessageWriter as Ros1Writer } from "@foxglove/rosmsg-serialization";
 import { MessageWriter } from "@foxglove/rosmsg2-serialization";
+import { Bag } from "@foxglove/rosbag";
+import rosbagNode from "@foxglove/rosbag/dist/cjs/node/index.js";
+import Bzip2 from "@foxglove/wasm-bz2";
+import lz4Decompress from "@foxglove/wasm-lz4";
+import compressjs from "compressjs";
 import * as zstd from "@foxglove/wasm-zstd";
 import lz4 from "lz4js";
 import initSqlJs from "sql.js";
@@ -39,7 +46,8 @@ const flaser = text.toString("latin1").split("\n").filter((l) => l.startsWith("F
 // A time [s] as ROS stamps it: whole seconds and nanoseconds.
 const stamp = (t) => {
   const sec = Math.floor(t);
-  return { sec, nanosec: Math.round((t - sec) * 1e9) };
+  const nanosec = Math.round((t - sec) * 1e9);
+  return { sec, nanosec, nsec: nanosec };  // ROS 2's and ROS 1's names
 };
 const ns = (s) => BigInt(s.sec) * 1000000000n + BigInt(s.nanosec);
 const quat = (yaw) => ({ x: 0, y: 0, z: Math.sin(yaw / 2), w: Math.cos(yaw / 2) });
@@ -129,6 +137,113 @@ function intelMessages({ scanTime = (k) => flaser[k].time + SCAN_DELAY } = {}) {
   return out;
 }
 
+// ---- ROS 1 bags (format 2.0) -----------------------------------------------------------------------
+// No npm package writes them: the container is written here by its specification, and read back
+// with @foxglove/rosbag, an independent reader, before it is kept. The messages are serialised by
+// @foxglove/rosmsg-serialization.
+const ROS1_HEADER = "Header\nuint32 seq\ntime stamp\nstring frame_id";
+const ros1Def = (type) => DEFS[type].replaceAll(SEP + HEADER, SEP + ROS1_HEADER)
+  .replace(/^std_msgs\/Header header$/m, "Header header")
+  .replaceAll("MSG: geometry_msgs/TransformStamped\nstd_msgs/Header header",
+              "MSG: geometry_msgs/TransformStamped\nHeader header")
+  .replace(/^(float64 [xyzw]) [01]$/gm, "$1");  // ROS 1 has no default values
+const ros1Type = (type) => type.replace("/msg/", "/");
+const ros1Parsed = Object.fromEntries(Object.keys(DEFS).map((t) => [t, parse(fixHeader(ros1Def(t)))]));
+function fixHeader(def) {  // "MSG: Header ..." is std_msgs/Header in ROS 1
+  return def.replaceAll("MSG: Header\n", "MSG: std_msgs/Header\n");
+}
+const ros1Writers = Object.fromEntries(Object.entries(ros1Parsed).map(([t, d]) => [t, new Ros1Writer(d)]));
+
+const u32 = (v) => { const b = Buffer.alloc(4); b.writeUInt32LE(v); return b; };
+const u64 = (v) => { const b = Buffer.alloc(8); b.writeBigUInt64LE(BigInt(v)); return b; };
+const rosTime = (t) => Buffer.concat([u32(Number(t / 1000000000n)), u32(Number(t % 1000000000n))]);
+const fields = (f) => Buffer.concat(Object.entries(f).map(([k, v]) => {
+  const b = Buffer.concat([Buffer.from(k + "="), Buffer.isBuffer(v) ? v : Buffer.from(v)]);
+  return Buffer.concat([u32(b.length), b]);
+}));
+const record = (header, data) => {
+  const h = fields(header);
+  return Buffer.concat([u32(h.length), h, u32(data.length), data]);
+};
+const OP = (n) => Buffer.from([n]);
+
+function writeRos1(file, messages, compression) {
+  const conns = new Map();
+  for (const m of messages)
+    if (!conns.has(m.topic)) conns.set(m.topic, { id: conns.size, type: m.type });
+  const connRecord = (topic) => {
+    const c = conns.get(topic);
+    return record({ op: OP(0x07), conn: u32(c.id), topic },
+                  fields({ topic, type: ros1Type(c.type), md5sum: md5(ros1Parsed[c.type]),
+                           message_definition: fixHeader(ros1Def(c.type)) }));
+  };
+  const HEADER_BYTES = 4096;
+  const parts = [];
+  let pos = 13 + HEADER_BYTES;
+  const chunkInfos = [];
+  for (let first = 0; first < messages.length; first += 40) {
+    const batch = messages.slice(first, first + 40);
+    const inner = [], index = new Map(), seen = new Set();
+    let offset = 0;
+    for (const m of batch) {
+      if (!seen.has(m.topic)) {
+        seen.add(m.topic);
+        const r = connRecord(m.topic);
+        inner.push(r);
+        offset += r.length;
+      }
+      const c = conns.get(m.topic);
+      if (!index.has(c.id)) index.set(c.id, []);
+      index.get(c.id).push([m.time, offset]);
+      const data = Buffer.from(ros1Writers[m.type].writeMessage(m.msg));
+      const r = record({ op: OP(0x02), conn: u32(c.id), time: rosTime(m.time) }, data);
+      inner.push(r);
+      offset += r.length;
+    }
+    const raw = Buffer.concat(inner);
+    const packed = compression === "lz4" ? Buffer.from(lz4.compress(raw))
+      : compression === "bz2" ? Buffer.from(compressjs.Bzip2.compressFile(raw)) : raw;
+    const chunk = record({ op: OP(0x05), compression, size: u32(raw.length) }, packed);
+    const indexes = [...index.entries()].map(([id, list]) =>
+      record({ op: OP(0x04), ver: u32(1), conn: u32(id), count: u32(list.length) },
+             Buffer.concat(list.map(([t, o]) => Buffer.concat([rosTime(t), u32(o)])))));
+    chunkInfos.push({ pos, start: batch[0].time, end: batch[batch.length - 1].time,
+                      counts: [...index.entries()].map(([id, l]) => [id, l.length]) });
+    parts.push(chunk, ...indexes);
+    pos += chunk.length + indexes.reduce((n, b) => n + b.length, 0);
+  }
+  const indexPos = pos;
+  for (const topic of conns.keys()) parts.push(connRecord(topic));
+  for (const c of chunkInfos)
+    parts.push(record({ op: OP(0x06), ver: u32(1), chunk_pos: u64(c.pos), start_time: rosTime(c.start),
+                        end_time: rosTime(c.end), count: u32(c.counts.length) },
+                      Buffer.concat(c.counts.map(([id, n]) => Buffer.concat([u32(id), u32(n)])))));
+  const headerFields = fields({ op: OP(0x03), index_pos: u64(indexPos), conn_count: u32(conns.size),
+                                chunk_count: u32(chunkInfos.length) });
+  const padding = Buffer.alloc(HEADER_BYTES - 8 - headerFields.length, 0x20);
+  const bagHeader = Buffer.concat([u32(headerFields.length), headerFields, u32(padding.length), padding]);
+  const bytes = Buffer.concat([Buffer.from("#ROSBAG V2.0\n"), bagHeader, ...parts]);
+  fs.writeFileSync(path.join(here, file), bytes);
+  return bytes;
+}
+
+/// Reads a ROS 1 bag back with @foxglove/rosbag; throws unless every message is there as written.
+async function checkRos1(file, messages) {
+  const bzip2 = await Bzip2.init();
+  await lz4Decompress.isLoaded;
+  const bag = new Bag(new rosbagNode.FileReader(path.join(here, file)), {
+    decompress: { lz4: (b, n) => lz4Decompress(b, n), bz2: (b, n) => bzip2.decompress(b, n, { small: false }) },
+  });
+  await bag.open();
+  const read = [];
+  for await (const r of bag.messageIterator()) read.push(r);
+  if (read.length !== messages.length) throw new Error(`${file}: read ${read.length} of ${messages.length}`);
+  const scan = read.find((r) => r.topic === "/scan").message;
+  const first = messages.find((m) => m.topic === "/scan").msg;
+  if (scan.ranges[5] !== first.ranges[5] || scan.header.stamp.nsec !== first.header.stamp.nsec)
+    throw new Error(`${file}: the first scan does not read back`);
+}
+
 // ---- MCAP ----------------------------------------------------------------------------------------
 class Buffered {
   chunks = []; size = 0n;
@@ -209,6 +324,11 @@ await writeMcap("intel-plain.mcap", messages, { chunkSize: 16384, useSummaryOffs
   useStatistics: false, useChunkIndex: false, useMessageIndex: false, repeatSchemas: false,
   repeatChannels: false });
 await writeDb3("intel-rosbag2", messages);
+const ros1 = messages.filter((m) => m.topic !== "/tf");
+for (const [file, compression] of [["intel.bag", "none"], ["intel-lz4.bag", "lz4"], ["intel-bz2.bag", "bz2"]]) {
+  writeRos1(file, ros1, compression);
+  await checkRos1(file, ros1);
+}
 // Scan 20 stamped before scan 19: a time that runs backwards.
 const back = intelMessages({ scanTime: (k) => flaser[k === 20 ? 18 : k].time + SCAN_DELAY });
 await writeMcap("backwards.mcap", back.filter((m) => m.topic === "/scan" || m.topic === "/odom"),
