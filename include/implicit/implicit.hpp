@@ -56,6 +56,7 @@
 #include "implicit/filter/proposals.hpp"
 #include "implicit/filter/recovery.hpp"
 #include "implicit/robot/any_motion_model.hpp"
+#include "implicit/robot/bag.hpp"
 #include "implicit/robot/beam_model.hpp"
 #include "implicit/robot/carmen.hpp"
 #include "implicit/robot/carpark.hpp"
