@@ -21,7 +21,8 @@
 //  * GridSlam/<name>: the whole log by the semi-synthetic protocol (slam::run_grid_slam, 8
 //    particles, data seed 1), once; counters: the mean translational and rotational relation error
 //    against the corrected poses over consecutive processed scans, CPU per processed scan, mean
-//    ESS / N and evaluations per particle and scan.
+//    ESS / N and evaluations per particle and scan; implicit_coarse4: with coarse-to-fine starts
+//    at 4 cells (slam::CoarseStartOptions).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -274,12 +275,14 @@ void proposal(benchmark::State& state, slam::GridProposalKind kind) {
   state.counters["evaluations"] = evaluations / std::max(1.0, calls);
 }
 
-void grid_slam_log(benchmark::State& state, slam::GridProposalKind kind) {
+void grid_slam_log(benchmark::State& state, slam::GridProposalKind kind, int coarse) {
   const std::filesystem::path file =
       find_share_dir("data", "IMPLICIT_DATA_DIR") / "carmen" / "intel-corrected.log.gz";
   const robot::CarmenLog log = robot::read_carmen(file);
   slam::GridSlamRunOptions o;
   o.proposal = kind;
+  o.implicit.coarse.coarse_smoothing = coarse;
+  o.scan_match.coarse.coarse_smoothing = coarse;
   slam::GridSlamRun run;
   for (auto _ : state) run = slam::run_grid_slam(log, o);
   state.counters["relation_t_m"] = run.relations.translation_mean;
@@ -306,16 +309,20 @@ BENCHMARK_CAPTURE(proposal, gmapping, slam::GridProposalKind::kScanMatch)
 BENCHMARK_CAPTURE(proposal, implicit, slam::GridProposalKind::kImplicit)
     ->Name("Proposal/implicit")
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(grid_slam_log, bootstrap, slam::GridProposalKind::kBootstrap)
+BENCHMARK_CAPTURE(grid_slam_log, bootstrap, slam::GridProposalKind::kBootstrap, 0)
     ->Name("GridSlam/bootstrap")
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
-BENCHMARK_CAPTURE(grid_slam_log, gmapping, slam::GridProposalKind::kScanMatch)
+BENCHMARK_CAPTURE(grid_slam_log, gmapping, slam::GridProposalKind::kScanMatch, 0)
     ->Name("GridSlam/gmapping")
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
-BENCHMARK_CAPTURE(grid_slam_log, implicit, slam::GridProposalKind::kImplicit)
+BENCHMARK_CAPTURE(grid_slam_log, implicit, slam::GridProposalKind::kImplicit, 0)
     ->Name("GridSlam/implicit")
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(grid_slam_log, implicit_coarse, slam::GridProposalKind::kImplicit, 4)
+    ->Name("GridSlam/implicit_coarse4")
     ->Iterations(1)
     ->Unit(benchmark::kSecond);
 BENCHMARK(map_update_tiled)->Name("MapUpdate/tiled")->Unit(benchmark::kMillisecond);

@@ -66,8 +66,8 @@ class BootstrapGridProposal final : public GridProposal {
 /// objective with the scan likelihood smoothed over `coarse_smoothing` cells (a basin twice as
 /// wide at 4 against 2), then from there with the model's own smoothing. Only the start of the
 /// second Newton changes: the weights are those of the fine objective. 0 (or not above the
-/// model's smoothing): off, the default: on the Intel log (8 particles, seed 1) it doubled the
-/// implicit proposal's CPU time for less than more starts gave at a fraction of the cost.
+/// model's smoothing): off, the default: on the Intel log it costs the implicit proposal more
+/// CPU than further starts for less gain (bench_grid_slam, GridSlam/implicit_coarse4).
 struct CoarseStartOptions {
   int coarse_smoothing = 0;
   /// Throws InvalidArgument unless 0 <= coarse_smoothing <= ScanMatchParams::kMaxSmoothing.
