@@ -4,6 +4,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <system_error>
 
 #include <bzlib.h>
@@ -140,7 +141,11 @@ std::string bag_decompress(std::string_view method, std::string_view in, std::ui
   };
   bool ok = false;
   if (method == "zstd") {
-    ZSTD_DCtx* z = ZSTD_createDCtx();
+    // Freed however the loop ends (append throws on output beyond `size`).
+    const std::unique_ptr<ZSTD_DCtx, decltype(&ZSTD_freeDCtx)> ctx(ZSTD_createDCtx(),
+                                                                   &ZSTD_freeDCtx);
+    if (!ctx) throw std::bad_alloc();
+    ZSTD_DCtx* z = ctx.get();
     ZSTD_inBuffer src{in.data(), in.size(), 0};
     std::size_t r = 1;
     for (;;) {  // frame after frame, until the input ends
@@ -150,11 +155,12 @@ std::string bag_decompress(std::string_view method, std::string_view in, std::ui
       append(dst.pos);
       if (src.pos == src.size && (r == 0 || dst.pos < dst.size)) break;
     }
-    ZSTD_freeDCtx(z);
     ok = r == 0;
   } else if (method == "lz4") {
     LZ4F_dctx* z = nullptr;
     if (LZ4F_isError(LZ4F_createDecompressionContext(&z, LZ4F_VERSION))) throw std::bad_alloc();
+    const std::unique_ptr<LZ4F_dctx, decltype(&LZ4F_freeDecompressionContext)> ctx(
+        z, &LZ4F_freeDecompressionContext);
     std::size_t pos = 0, r = 1;
     while (r != 0 && pos < in.size()) {
       std::size_t n_out = buf.size(), n_in = in.size() - pos;
@@ -164,11 +170,11 @@ std::string bag_decompress(std::string_view method, std::string_view in, std::ui
       append(n_out);
       if (n_in == 0 && n_out == 0) break;
     }
-    LZ4F_freeDecompressionContext(z);
     ok = r == 0 && pos == in.size();
   } else if (method == "bz2") {
     bz_stream s{};
     if (BZ2_bzDecompressInit(&s, 0, 0) != BZ_OK) throw std::bad_alloc();
+    const std::unique_ptr<bz_stream, decltype(&BZ2_bzDecompressEnd)> ctx(&s, &BZ2_bzDecompressEnd);
     s.next_in = const_cast<char*>(in.data());  // bzlib's interface is not const; it only reads
     s.avail_in = static_cast<unsigned>(std::min<std::size_t>(in.size(), UINT32_MAX));
     int r = BZ_OK;
@@ -182,7 +188,6 @@ std::string bag_decompress(std::string_view method, std::string_view in, std::ui
       if (r == BZ_OK && n == 0 && s.avail_in == 0) break;  // input ends early
     }
     ok = r == BZ_STREAM_END && s.avail_in == 0 && in.size() <= UINT32_MAX;
-    BZ2_bzDecompressEnd(&s);
   } else {
     throw ParseError(fmt::format("{}: compression '{}': expected none, zstd, lz4 or bz2", where,
                                  printable(method, 40)));
