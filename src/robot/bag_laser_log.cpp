@@ -142,8 +142,8 @@ void read_mount(const BagContents& bag, BagLaserLog& out) {
   out.mount_from_tf = true;
 }
 
-std::vector<CarmenLog::Odometry> read_odometry(const BagContents& bag, std::size_t topic,
-                                               std::string& child_frame) {
+std::vector<CarmenLog::Odometry> read_bag_odometry(const BagContents& bag, std::size_t topic,
+                                                   std::string& child_frame) {
   const bool odometry = bag_base_type(bag.topics[topic].type) == "nav_msgs/Odometry";
   std::vector<CarmenLog::Odometry> out;
   std::size_t index = 0;
@@ -192,7 +192,7 @@ BagLaserLog bag_laser_log(const BagContents& bag, const BagOptions& options) {
   CarmenLog& log = out.log;
   log.source = bag.source;
   std::string child_frame;
-  log.odometry = read_odometry(bag, odom_topic, child_frame);
+  log.odometry = read_bag_odometry(bag, odom_topic, child_frame);
   out.base_frame = !options.base_frame.empty() ? options.base_frame
                    : !child_frame.empty()      ? child_frame
                                                : std::string("base_link");

@@ -51,7 +51,7 @@ SqliteDb open_bytes(std::string_view bytes, std::string_view name) {
   return db;
 }
 
-SqliteStatement prepare(sqlite3* db, const char* sql, std::string_view name) {
+SqliteStatement prepare_statement(sqlite3* db, const char* sql, std::string_view name) {
   sqlite3_stmt* raw = nullptr;
   if (sqlite3_prepare_v2(db, sql, -1, &raw, nullptr) != SQLITE_OK)
     sqlite_fail(name, db, fmt::format("query '{}'", sql));
@@ -107,10 +107,10 @@ BagContents read_rosbag2_sqlite(const std::filesystem::path& file, std::string_v
   std::vector<std::int64_t> ids;
   std::vector<bool> wanted;
   {
-    SqliteStatement s = prepare(db.get(),
-                                "SELECT id, name, type, serialization_format FROM topics "
-                                "ORDER BY id",
-                                name);
+    SqliteStatement s = prepare_statement(db.get(),
+                                          "SELECT id, name, type, serialization_format FROM topics "
+                                          "ORDER BY id",
+                                          name);
     int rc = 0;
     while ((rc = sqlite3_step(s.get())) == SQLITE_ROW) {
       BagTopic t;
@@ -127,10 +127,10 @@ BagContents read_rosbag2_sqlite(const std::filesystem::path& file, std::string_v
     }
     if (rc != SQLITE_DONE) sqlite_fail(name, db.get(), "reading the topics table");
   }
-  SqliteStatement s = prepare(db.get(),
-                              "SELECT topic_id, timestamp, data FROM messages "
-                              "ORDER BY timestamp, id",
-                              name);
+  SqliteStatement s = prepare_statement(db.get(),
+                                        "SELECT topic_id, timestamp, data FROM messages "
+                                        "ORDER BY timestamp, id",
+                                        name);
   int rc = 0;
   std::size_t row = 0;
   while ((rc = sqlite3_step(s.get())) == SQLITE_ROW) {
