@@ -55,6 +55,7 @@ void GridSlam::initialize(const robot::Pose& x0, const robot::Pose& odometry,
   stats_.assign(options_.particles, GridProposalStats{});
   last_odometry_ = odometry;
   steps_ = 0;
+  calls_ = 0;
   best_ = 0;
   initialized_ = true;
 }
@@ -63,8 +64,9 @@ GridSlamStep GridSlam::step(const robot::Pose& odometry, const robot::LaserScan&
   require(initialized_, "GridSlam::step: initialize() first");
   require(odometry.allFinite(), "GridSlam::step: expected a finite odometry pose, got ({}, {}, {})",
           odometry(0), odometry(1), odometry(2));
-  const std::string where = "GridSlam::step: scan " + std::to_string(steps_ + 1);
+  const std::string where = "GridSlam::step: scan " + std::to_string(calls_ + 1);
   scan.validate(where);
+  ++calls_;  // scans accepted since initialize(), processed or not
   GridSlamStep r;
   if (!options_.gate.due(last_odometry_, odometry)) return r;
   r.processed = true;
@@ -79,19 +81,21 @@ GridSlamStep GridSlam::step(const robot::Pose& odometry, const robot::LaserScan&
   nodes_.resize(base + m);
   ++steps_;
   const std::uint64_t n = steps_;
-  engine_.move([&](std::size_t j, GridSlamParticle& p) {
-    const GridScanModel model = GridScanModel::unchecked(p.map, options_.scan, options_.mount);
-    const GridProposalInput in{&motion_, u, &model, &beams_};
-    GridProposalStats& st = stats_[j];
-    st = GridProposalStats{};
-    Rng rng({.seed = options_.seed, .step = n, .index = j, .purpose = purpose::kProposal});
-    robot::Pose next;
-    const double lw = proposal_->propose(in, p.pose, rng, next, st);
-    nodes_[base + j] = {next, scan.time, p.node};
-    p.pose = next;
-    p.node = static_cast<std::uint32_t>(base + j);
-    return lw;
-  });
+  engine_.move(
+      [&](std::size_t j, GridSlamParticle& p) {
+        const GridScanModel model = GridScanModel::unchecked(p.map, options_.scan, options_.mount);
+        const GridProposalInput in{&motion_, u, &model, &beams_};
+        GridProposalStats& st = stats_[j];
+        st = GridProposalStats{};
+        Rng rng({.seed = options_.seed, .step = n, .index = j, .purpose = purpose::kProposal});
+        robot::Pose next;
+        const double lw = proposal_->propose(in, p.pose, rng, next, st);
+        nodes_[base + j] = {next, scan.time, p.node};
+        p.pose = next;
+        p.node = static_cast<std::uint32_t>(base + j);
+        return lw;
+      },
+      1);  // a particle's proposal is heavy enough to be a task of its own
   const filter::Reweighting rw = engine_.reweight();
   r.ess = rw.ess;
   r.log_likelihood_increment = rw.log_likelihood_increment;

@@ -91,8 +91,9 @@ class GridSlam {
   /// odometry pose then. Throws InvalidArgument for a non-finite pose or an invalid scan.
   void initialize(const robot::Pose& x0, const robot::Pose& odometry, const robot::LaserScan& scan);
   /// One scan with the robot's odometry pose when it was taken (see the file comment). Throws
-  /// InvalidArgument before any change for non-finite odometry or an invalid scan, or when
-  /// initialize() has not run.
+  /// InvalidArgument before any change for non-finite odometry or an invalid scan (named by its
+  /// number among the scans accepted since initialize(), from 1), or when initialize() has not
+  /// run.
   GridSlamStep step(const robot::Pose& odometry, const robot::LaserScan& scan);
 
   const GridSlamOptions& options() const { return options_; }
@@ -127,6 +128,7 @@ class GridSlam {
   robot::Pose last_odometry_ = robot::Pose::Zero();
   bool initialized_ = false;
   std::size_t steps_ = 0;
+  std::size_t calls_ = 0;
   std::size_t best_ = 0;
 };
 
