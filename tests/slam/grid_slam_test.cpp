@@ -93,9 +93,9 @@ double grid_slam_filter_drive(const GridSlamDrive& d, const GridSlamOptions& o,
   return sum / static_cast<double>(path.size());
 }
 
-// The scans pin each pose to about a cell (5 cm; the scan match's kernel spans 4 cells), and the
-// map is built from the filter's own poses, so errors add up slowly: 2 cells on average. The drive
-// must be a test of the scans: dead reckoning (the odometry's own mean error, anchored at the
+// The scans pin each pose to about a cell (5 cm cells; the scan match smooths over 8 of them), and
+// the map is built from the filter's own poses, so errors add up slowly: 2 cells on average. The
+// drive must be a test of the scans: dead reckoning (the odometry's own mean error, anchored at the
 // first pose) is off by more than twice that.
 constexpr double kGridSlamTolerance = 0.10;
 
