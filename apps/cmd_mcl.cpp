@@ -190,6 +190,8 @@ void setup_mcl(CLI::App& sub) {
       cmd->settings.map = cmd->map;
     }
     cmd->settings.allow_empty = cmd->allow_empty;
+    cmd->settings.trajectory = cmd->laser.trajectory;
+    cmd->settings.truth_trajectory = cmd->laser.truth_trajectory;
     // M = 100 is the tracking default; started without a pose it finds the car in too few runs,
     // so a global start without -M adapts its count by KLD-sampling (spec §3.11).
     if (cmd->settings.init == "global" && cmd->particles->count() == 0) cmd->settings.kld = true;

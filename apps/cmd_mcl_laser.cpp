@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "implicit/core/error.hpp"
+#include "tum_output.hpp"
 
 namespace implicit::app {
 
@@ -111,8 +112,13 @@ void add_laser_options(CLI::App& sub, LaserCommand& l) {
       ->check(in_range(0.0, 0.99))
       ->capture_default_str();
   sub.add_option("--trajectory", l.trajectory,
-                 "laser: write the first run's estimate as a TUM trajectory file (t x y z qx qy qz "
-                 "qw)");
+                 "Write the first run's estimate as a TUM trajectory file (t x y z qx qy qz qw), "
+                 "for implicit eval")
+      ->check(tum_file_validator());
+  sub.add_option("--truth-trajectory", l.truth_trajectory,
+                 "Write the reference the runs are scored against as a TUM file (its steps with a "
+                 "known pose)")
+      ->check(tum_file_validator());
 }
 
 namespace {
@@ -137,16 +143,19 @@ bool laser_recovery(const MclSettings& shared) {
   return shared.recovery == "uniform";
 }
 
-void write_tum(const std::string& file, const experiments::LaserMclResult& r,
-               const experiments::LaserDataset& d) {
-  OutputFile out(file);
-  const auto& est = r.runs.front().estimates;
-  for (std::size_t k = 0; k < est.size(); ++k) {
-    const double h = 0.5 * est[k](2);
-    out.stream() << fmt::format("{:.6f} {:.6f} {:.6f} 0 0 0 {:.9f} {:.9f}\n", d.scans[k].time,
-                                est[k](0), est[k](1), std::sin(h), std::cos(h));
+void write_tum_files(const LaserCommand& l, const experiments::LaserMclResult& r,
+                     const experiments::LaserDataset& d) {
+  if (!l.trajectory.empty()) {
+    TumTrack est;
+    const auto& poses = r.runs.front().estimates;
+    for (std::size_t k = 0; k < poses.size(); ++k) est.add(d.scans[k].time, poses[k]);
+    est.write(l.trajectory, "mcl --trajectory");
   }
-  out.commit();
+  if (!l.truth_trajectory.empty()) {
+    TumTrack truth;
+    for (std::size_t k = 0; k < d.reference.size(); ++k) truth.add(d.scans[k].time, d.reference[k]);
+    truth.write(l.truth_trajectory, "mcl --truth-trajectory");
+  }
 }
 
 }  // namespace
@@ -196,7 +205,7 @@ void run_laser_mcl_command(const MclSettings& shared, const std::string& map_fil
   Progress bar("laser MCL runs", static_cast<std::size_t>(s.runs), ctx.show_progress());
   const auto r = experiments::run_laser_mcl(s, data, [&](int, int) { bar.tick(); });
   bar.finish();
-  if (!l.trajectory.empty()) write_tum(l.trajectory, r, data);
+  write_tum_files(l, r, data);
   nlohmann::json j = experiments::to_json(r);
   if (!ctx.out_dir.empty()) {
     OutputFile out(ctx.csv_path("laser_mcl.json"));

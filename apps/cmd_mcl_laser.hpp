@@ -22,8 +22,9 @@ struct LaserCommand {
   std::vector<double> alphas, filter_alphas;
   std::string interpolation = "bicubic", aggregation = "product";
   std::string laser_model = "likelihood-field";
-  BagFlags bag;  ///< a ROS bag as --data: its topics and frames
-  std::string trajectory;  ///< TUM file of the first run's estimate
+  BagFlags bag;                  ///< a ROS bag as --data: its topics and frames
+  std::string trajectory;        ///< TUM file of the first run's estimate
+  std::string truth_trajectory;  ///< TUM file of the reference (--truth-trajectory)
 };
 
 /// Adds --sensor and the laser's options to the mcl subcommand.

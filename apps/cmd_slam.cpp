@@ -9,6 +9,7 @@
 #include "implicit/core/parallel.hpp"
 #include "plural.hpp"
 #include "registry.hpp"
+#include "tum_output.hpp"
 
 namespace implicit::app {
 namespace {
@@ -103,6 +104,13 @@ void setup_slam(CLI::App& sub) {
                  "Motion noise: sd of x [m], y [m], heading [rad] per sqrt(s)")
       ->expected(3)
       ->check(in_range(1e-9, 100.0));
+  sub.add_option("--trajectory", s.trajectory,
+                 "Write the first run's path as a TUM trajectory file (t x y z qx qy qz qw; t in "
+                 "seconds from the first pose), for implicit eval")
+      ->check(tum_file_validator());
+  sub.add_option("--truth-trajectory", s.truth_trajectory,
+                 "Write the first data set's truth (its steps with a known pose) as a TUM file")
+      ->check(tum_file_validator());
   add_common_options(sub, cmd->ctx);
   set_examples(sub, {"implicit slam --method implicit-rb --particles 100 --datasets 10 --json",
                      "implicit slam --method ekf --datasets 50 --out out/slam",

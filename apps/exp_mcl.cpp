@@ -24,6 +24,7 @@
 #include "implicit/robot/csv_table.hpp"
 #include "parallel_runs.hpp"
 #include "run_statistics.hpp"
+#include "tum_output.hpp"
 #include "vehicle.hpp"
 #include "wilson.hpp"
 
@@ -166,6 +167,25 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
                              const robot::RangeBearingSensor& sensor, const MclSetup& setup);
 
 }  // namespace
+
+void write_mcl_tum_files(const MclSettings& s, const LocalizationProblem& problem,
+                         const LocalizationRun& run) {
+  if (!s.trajectory.empty()) {
+    TumTrack est;
+    for (std::size_t k = 0; k < run.steps.size(); ++k)
+      est.add(problem.schedule.steps[run.first_step + k].time, run.steps[k].mean);
+    est.write(s.trajectory, "mcl --trajectory");
+  }
+  if (!s.truth_trajectory.empty()) {
+    TumTrack truth;
+    const auto& t = problem.truth;
+    for (std::size_t n = 0; n < problem.schedule.steps.size(); ++n)
+      if (n < t.position.size() && n < t.heading.size())
+        truth.add(problem.schedule.steps[n].time,
+                  Pose(t.position[n](0), t.position[n](1), t.heading[n]));
+    truth.write(s.truth_trajectory, "mcl --truth-trajectory");
+  }
+}
 
 nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   require(s.method == "standard" || s.method == "implicit",
@@ -357,6 +377,9 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
     if (s.p >= 0) name += fmt::format("_p{}", s.p);
     write_trajectory(ctx.csv_path(name + "_trajectory.csv"), problem, run_number(median_run));
   }
+
+  if (rank_index() == 0 && (!s.trajectory.empty() || !s.truth_trajectory.empty()))
+    write_mcl_tum_files(s, problem, run_number(0));
 
   // Dead reckoning from the prior mean: the error with no laser at all.
   std::vector<Pose> dr;

@@ -196,6 +196,8 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
                      run.uniform_start ? 1.0 : 0.0};
   });
   bar.finish();
+  if (rank_index() == 0 && (!s.trajectory.empty() || !s.truth_trajectory.empty()))
+    write_mcl_tum_files(s, problem, run_number(0).first);
   // Only rank 0 writes (parallel_runs.hpp); the first few runs are redone for their error traces.
   if (!ctx.out_dir.empty() && rank_index() == 0)
     write_errors(ctx.csv_path(fmt::format("mcl_{}_{}_M{}_errors.csv", kidnap ? "kidnap" : "global",

@@ -12,6 +12,11 @@ namespace implicit::app {
 /// Refuses settings a global or kidnapping run cannot honour (before any data is loaded).
 void check_global_settings(const MclSettings& s);
 
+/// --trajectory (run 0's estimate) and --truth-trajectory (the truth, where known) as TUM files;
+/// nothing when neither is set (exp_mcl.cpp).
+void write_mcl_tum_files(const MclSettings& s, const filter::LocalizationProblem& problem,
+                         const filter::LocalizationRun& run);
+
 /// Keys: global_success_rate or kidnap_recovery_rate, time_to_converge_s_median or
 /// recovery_time_s_median, particles_mean, particles_peak, cpu_ms_per_step, per-run lists.
 nlohmann::json run_mcl_global(const MclSettings& s, const RunContext& ctx,

@@ -24,6 +24,7 @@
 #include "implicit/slam/evaluate.hpp"
 #include "implicit/slam/slam_filter.hpp"
 #include "parallel_runs.hpp"
+#include "tum_output.hpp"
 #include "vehicle.hpp"
 
 namespace implicit::app {
@@ -112,6 +113,30 @@ void write_csv_outputs(const RunContext& ctx, const std::string& stem, const sla
                         run.map.landmarks[k](1));
     file.commit();
   }
+}
+
+/// --trajectory: run 0's path; --truth-trajectory: data set 0's truth where it is known. Times
+/// are seconds from the first pose (step n at the sum of the first n step lengths).
+void write_slam_tum_files(const SlamSettings& s, const slam::SlamDataset& d,
+                          const slam::SlamRun& run) {
+  if (s.trajectory.empty() && s.truth_trajectory.empty()) return;
+  TumTrack est, truth;
+  double time = 0.0;
+  for (std::size_t n = 0; n < run.path.size(); ++n) {
+    if (n > 0) time += d.step_length(n);
+    est.add(time, run.path[n]);
+    if (n == 0)
+      truth.add(time, d.initial_pose);
+    else if (d.has_truth(n))
+      truth.add(time, d.truth[n]);
+  }
+  if (!s.trajectory.empty()) est.write(s.trajectory, "slam --trajectory");
+  if (s.truth_trajectory.empty()) return;
+  require(d.truth_has_heading,
+          "slam --truth-trajectory {}: the truth of {} is a position fix without heading; a TUM "
+          "file needs the full pose",
+          s.truth_trajectory, d.name);
+  truth.write(s.truth_trajectory, "slam --truth-trajectory");
 }
 
 // What the summary needs of one run, as numbers that travel between ranks (parallel_runs.hpp).
@@ -288,6 +313,12 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
       skipped.observations_skipped = d.detections_unscheduled;
       warn_skipped_scans("slam", d.name, skipped, d.vehicle.dt);
     }
+  // Refused before the runs: a truth file that cannot be written would cost the whole run.
+  if (!s.truth_trajectory.empty() && !logs.empty())
+    require(!logs[0].truth.empty() && logs[0].truth_has_heading,
+            "slam --truth-trajectory {}: {} has {}; a TUM file needs the full pose",
+            s.truth_trajectory, logs[0].name,
+            logs[0].truth.empty() ? "no truth" : "a truth of position fixes without heading");
   const auto k_runs = static_cast<std::size_t>(s.datasets);
   std::vector<RunSummary> runs(k_runs);
   const double cpu0 = cpu_seconds();
@@ -446,6 +477,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["threads"] = active_threads();
   j["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
 
+  if (rank_index() == 0) write_slam_tum_files(s, data0, runs[0].run);
   if (!ctx.out_dir.empty()) {
     const std::string stem = fmt::format("slam_{}_M{}", s.method, particles);
     write_csv_outputs(ctx, stem, data0, runs[0].run);

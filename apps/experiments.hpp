@@ -63,6 +63,8 @@ struct MclSettings {
   /// Labelled detections: chi-square gate on d^2 against the prediction; 0 = trust every label.
   double label_gate = robot::kLabelGateDefault;
   std::string sigma2 = "variance";  ///< reading of Table 7's Sigma2: "variance" or "std"
+  std::string trajectory;           ///< TUM file of run 0's estimate (empty: none)
+  std::string truth_trajectory;     ///< TUM file of the truth the runs are scored against
   std::string truth = "gps";        ///< ground truth: "gps" or "reference" (GPS-aided MCL run)
   double gps_std = 0.5;             ///< [m] GPS std assumed by the reference run
   int reference_particles = 5000;   ///< particles of the reference run
@@ -121,6 +123,8 @@ struct SlamSettings {
   std::string model;                  ///< "ute" | "unicycle"; empty: what the log declares
   std::vector<double> control_sd;     ///< motion noise sd of u1, u2 (overrides control_noise)
   std::vector<double> state_sd;       ///< motion noise sd of x, y, heading; empty: default
+  std::string trajectory;             ///< TUM file of run 0's path (empty: none)
+  std::string truth_trajectory;       ///< TUM file of data set 0's truth, where known
 };
 /// Keys: method, particles, datasets, error_percent_mean/std, error_aligned_percent_mean,
 /// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_pose_aligned_m, rmse_map_m, nees_mean

@@ -69,6 +69,8 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
        {{"mcl --particles 0", 2, {"--particles"}},
         {"mcl --data DIR/gone.log", 1, {"gone.log"}},
         {"mcl --label-gate -1", 2, {"--label-gate"}},
+        {"mcl --trajectory ''", 2, {"--trajectory"}},
+        {"mcl --truth-trajectory DIR/gone/t.tum", 2, {"--truth-trajectory", "gone"}},
         {"mcl --init nowhere", 2, {"--init", "nowhere"}},
         {"mcl --sensor laser --data DIR/gone.mcap --scan-topic ''", 2, {"--scan-topic"}},
         {"mcl --sensor laser --data DIR/gone.mcap --odom-topic ''", 2, {"--odom-topic"}},
@@ -89,7 +91,9 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
       {"slam",
        {{"slam --particles 0", 2, {"--particles"}},
         {"slam --data DIR/gone.log", 1, {"gone.log"}},
-        {"slam --control-noise nan", 2, {"--control-noise"}}}},
+        {"slam --control-noise nan", 2, {"--control-noise"}},
+        {"slam --trajectory DIR/gone/e.tum", 2, {"--trajectory", "gone"}},
+        {"slam --truth-trajectory ''", 2, {"--truth-trajectory"}}}},
       {"slit", {{"slit --runs 0", 2, {"--runs"}}, {"slit --mode nope", 2, {"--mode", "nope"}}}},
   };
   return rows;
