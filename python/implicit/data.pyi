@@ -51,6 +51,11 @@ class Steps:
 def carpark() -> Log: ...
 def victoria_park() -> Log: ...
 def read_log(path: str) -> Log: ...
+def read_bag(path: str, scan_topic: Optional[str] = None, odom_topic: Optional[str] = None,
+             base_frame: Optional[str] = None, laser_frame: Optional[str] = None) -> dict:
+    """A ROS bag (MCAP, rosbag2 SQLite file or folder, ROS 1 bag) as the dict of
+    implicit.laser.read_carmen, plus odometry (times, poses, tv, rv), mount (x, y, yaw),
+    mount_from_tf, base_frame, laser_frame and scans_outside_odometry."""
 def steps(log: Log, model: Union[Ute, Unicycle]) -> Steps:
     """The log as filter steps at the model's nominal dt. A log that declares its vehicle
     (log.vehicle) takes that model only: another raises ValueError with the message of

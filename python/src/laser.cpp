@@ -428,6 +428,9 @@ void bind_odometry(py::module_& m) {
 }
 
 }  // namespace
+
+py::dict carmen_log_dict(const robot::CarmenLog& log) { return carmen_dict(log); }
+
 }  // namespace implicit::python::laser
 
 namespace implicit::python {

@@ -14,6 +14,7 @@
 #include "common.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/robot/beam_model.hpp"
+#include "implicit/robot/carmen.hpp"
 #include "implicit/robot/laser_scan.hpp"
 #include "implicit/robot/likelihood_field.hpp"
 #include "implicit/robot/occupancy_grid.hpp"
@@ -28,6 +29,9 @@ inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr long long kMaxInt = std::numeric_limits<long long>::max();
 
 // type_name, number_arg, int_arg, seed_arg, bool_arg, choice_arg and path_arg: common.hpp.
+
+/// A CARMEN log (or a bag read as one) as the dict of implicit.laser.read_carmen.
+py::dict carmen_log_dict(const robot::CarmenLog& log);
 
 /// An (n,) array of finite values.
 Vec<3> vec3_arg(const py::handle& o, const std::string& name);

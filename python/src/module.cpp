@@ -10,6 +10,7 @@ namespace implicit::python {
 void init_core(py::module_& m);
 void init_models(py::module_& m);
 void init_data(py::module_& m);
+void init_bag(py::module_& m);
 void init_filter(py::module_& m);
 void init_slam(py::module_& m);
 void init_runs(py::module_& m);
@@ -29,6 +30,7 @@ PYBIND11_MODULE(_implicit, m) {
   ip::init_models(models);
   auto data = m.def_submodule("data", "Robot logs and data sets.");
   ip::init_data(data);
+  ip::init_bag(data);
   ip::init_filter(m);
   auto slam = m.def_submodule("slam", "SLAM filters.");
   ip::init_slam(slam);
