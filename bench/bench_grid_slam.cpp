@@ -22,7 +22,9 @@
 //    particles, data seed 1), once; counters: the mean translational and rotational relation error
 //    against the corrected poses over consecutive processed scans, CPU per processed scan, mean
 //    ESS / N and evaluations per particle and scan; implicit_coarse4: with coarse-to-fine starts
-//    at 4 cells (slam::CoarseStartOptions).
+//    at 4 cells (slam::CoarseStartOptions);
+//  * GridSlamSeeds/<name>: the same over seeds 1..10: mean and standard deviation of the runs'
+//    mean relation errors, and the mean CPU per processed scan.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -294,8 +296,60 @@ void grid_slam_log(benchmark::State& state, slam::GridProposalKind kind, int coa
   state.counters["fallbacks"] = static_cast<double>(run.fallbacks);
 }
 
+// The same over seeds 1..10 (filter and odometry noise): the mean and the standard deviation over
+// the seeds of each run's mean relation errors, and the mean CPU per processed scan.
+void grid_slam_seeds(benchmark::State& state, slam::GridProposalKind kind) {
+  const std::filesystem::path file =
+      find_share_dir("data", "IMPLICIT_DATA_DIR") / "carmen" / "intel-corrected.log.gz";
+  const robot::CarmenLog log = robot::read_carmen(file);
+  std::vector<double> t, r, cpu;
+  for (auto _ : state) {
+    t.clear();
+    r.clear();
+    cpu.clear();
+    for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+      slam::GridSlamRunOptions o;
+      o.proposal = kind;
+      o.filter.seed = seed;
+      o.data_seed = seed;
+      const slam::GridSlamRun run = slam::run_grid_slam(log, o);
+      t.push_back(run.relations.translation_mean);
+      r.push_back(run.relations.rotation_mean_deg);
+      cpu.push_back(1e3 * run.cpu_seconds / static_cast<double>(run.processed));
+    }
+  }
+  const auto mean = [](const std::vector<double>& v) {
+    double sum = 0.0;
+    for (double x : v) sum += x;
+    return sum / static_cast<double>(v.size());
+  };
+  const auto sd = [&](const std::vector<double>& v) {
+    const double m = mean(v);
+    double sum = 0.0;
+    for (double x : v) sum += (x - m) * (x - m);
+    return std::sqrt(sum / static_cast<double>(v.size() - 1));
+  };
+  state.counters["relation_t_m"] = mean(t);
+  state.counters["relation_t_sd"] = sd(t);
+  state.counters["relation_r_deg"] = mean(r);
+  state.counters["relation_r_sd"] = sd(r);
+  state.counters["cpu_ms_per_scan"] = mean(cpu);
+}
+
 }  // namespace
 
+BENCHMARK_CAPTURE(grid_slam_seeds, gmapping, slam::GridProposalKind::kScanMatch)
+    ->Name("GridSlamSeeds/gmapping")
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(grid_slam_seeds, implicit, slam::GridProposalKind::kImplicit)
+    ->Name("GridSlamSeeds/implicit")
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
+BENCHMARK_CAPTURE(grid_slam_seeds, bootstrap, slam::GridProposalKind::kBootstrap)
+    ->Name("GridSlamSeeds/bootstrap")
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
 BENCHMARK_CAPTURE(scan_match, value, false)->Name("ScanMatch/value")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(scan_match, derivatives, true)
     ->Name("ScanMatch/derivatives")
