@@ -103,9 +103,9 @@ struct ImplicitGridOptions {
   CoarseStartOptions coarse;
   /// Newton runs from f and from starts - 1 poses drawn from N(f, Sigma1); the lowest minimum
   /// centres the map. The starts are drawn before x, so the weights stay exact
-  /// (filter/observation_proposals.hpp). After a turn the odometry's heading can be off by
-  /// 10 degrees, beyond the basin around f, and the particles would all find the same wrong
-  /// minimum; other starts give them other basins, as GMapping's sampled starts do.
+  /// (filter/observation_proposals.hpp). After a short step with a turn the odometry's heading
+  /// can be off by many degrees, beyond the basin around f, and the particles would all find the
+  /// same wrong minimum; other starts give them other basins, as GMapping's sampled starts do.
   int starts = 4;
   /// Throws InvalidArgument naming the field.
   void validate() const;
