@@ -146,8 +146,8 @@ TEST(GridSlam, ResultsDoNotDependOnTheThreadCount) {
 
 // One step of one particle on a coarse map (0.2 m cells, 4 beams): the posterior is wide enough
 // for a 3-D quadrature of Z = integral N(x; f, Sigma1) p(z | x, map) dx, and the mean of the
-// implicit weights (several starts; one coarse-to-fine start) and of the bootstrap weights must
-// match it within 4 standard errors.
+// implicit weights (several starts; one coarse-to-fine start; the random map) and of the
+// bootstrap weights must match it within 4 standard errors.
 TEST(GridSlam, ImplicitWeightsAreExact) {
   const GridSlamDrive d = grid_slam_drive(2);
   robot::GridMappingOptions mo;
@@ -165,13 +165,13 @@ TEST(GridSlam, ImplicitWeightsAreExact) {
   const Pose previous = d.truth[0];
   const robot::OdometryDelta u = robot::between(d.truth[0], d.truth[1]) + Vec<3>(0.05, -0.03, 0.02);
   const GridProposalInput in{&motion, u, &model, &beams};
-  // Z by the trapezoid rule on +-6 sd of the motion prior (spacing 0.4 sd per axis).
+  // Z by the trapezoid rule on +-6 sd of the motion prior (spacing 0.5 sd per axis).
   Pose f;
   robot::Mat3 cov;
   motion.predict_with_covariance(previous, u, f, cov);
   const Eigen::LLT<robot::Mat3> llt(cov);
   const robot::Mat3 l = llt.matrixL();
-  const int half = 15;
+  const int half = 12;
   const double h = 6.0 / half;
   double z = 0.0;
   for (int a = -half; a <= half; ++a)
@@ -186,8 +186,10 @@ TEST(GridSlam, ImplicitWeightsAreExact) {
        {std::shared_ptr<const GridProposal>(std::make_shared<ImplicitGridProposal>()),
         std::shared_ptr<const GridProposal>(std::make_shared<ImplicitGridProposal>(
             ImplicitGridOptions{.coarse = {.coarse_smoothing = 4}, .starts = 1})),
+        std::shared_ptr<const GridProposal>(std::make_shared<ImplicitGridProposal>(
+            ImplicitGridOptions{.coarse = {}, .starts = 1, .random_map = true})),
         std::shared_ptr<const GridProposal>(std::make_shared<BootstrapGridProposal>())}) {
-    const int samples = 2000;
+    const int samples = 1000;
     double sum = 0.0, sum2 = 0.0;
     for (int j = 0; j < samples; ++j) {
       Rng rng({.seed = 5, .index = static_cast<std::uint64_t>(j), .purpose = purpose::kProposal});

@@ -270,7 +270,11 @@ double ImplicitGridProposal::propose(const GridProposalInput& in, const robot::P
     }
     return lw;
   }
-  const double lw = linear_map(obj, nr.x, nr.factor, xi, next);
+  double lw = -std::numeric_limits<double>::infinity();
+  if (!options_.random_map)
+    lw = linear_map(obj, nr.x, nr.factor, xi, next);
+  else if (implicit::random_map(obj, nr.x, nr.value, nr.factor, xi, next, lw) != RayStatus::kOk)
+    next = nr.x;  // no root on the ray: weight zero
   if (!std::isfinite(lw)) {
     st.failed = true;
     return kGridNegInf;

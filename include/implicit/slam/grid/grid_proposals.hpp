@@ -107,6 +107,10 @@ struct ImplicitGridOptions {
   /// can be off by many degrees, beyond the basin around f, and the particles would all find the
   /// same wrong minimum; other starts give them other basins, as GMapping's sampled starts do.
   int starts = 4;
+  /// The random map (spec §1.3) instead of the linear one: x = mu + lambda L^-T xi / |xi| with
+  /// F(x) = F(mu) + |xi|^2 / 2. Exact where F's level sets are star-shaped about mu; a ray
+  /// without a root gives the sample weight zero.
+  bool random_map = false;
   /// Throws InvalidArgument naming the field.
   void validate() const;
 };
