@@ -20,17 +20,18 @@ namespace implicit::app {
 namespace {
 
 struct ConvertCommand {
-  std::string data, out;
+  std::string data;
+  RunContext ctx;  ///< --json, and --out: here the CARMEN log FILE (--seed, --threads: unused)
   BagFlags bag;
-  bool json = false;
 };
 
 void run_convert(const ConvertCommand& c) {
   const robot::BagLaserLog b = robot::read_bag_laser_log(c.data, c.bag.options);
-  robot::write_text_file(c.out, robot::carmen_log_text(b.log));
+  const std::string out = c.ctx.out_dir.string();
+  robot::write_text_file(out, robot::carmen_log_text(b.log));
   const robot::LaserMount& m = b.mount;
-  if (c.json) {
-    print_json({{"file", c.out},
+  if (c.ctx.json) {
+    print_json({{"file", out},
                 {"data", c.data},
                 {"scans", b.log.scans.size()},
                 {"scans_outside_odometry", b.scans_outside_odometry},
@@ -46,7 +47,7 @@ void run_convert(const ConvertCommand& c) {
   fmt::print(
       "{}: {} scans of {} ({} left out: no odometry around their stamp), {} odometry poses "
       "of {}\n  the laser ({}) on the robot ({}) at x {} m, y {} m, yaw {} rad ({})\n",
-      c.out, b.log.scans.size(), c.bag.options.scan_topic, b.scans_outside_odometry,
+      out, b.log.scans.size(), c.bag.options.scan_topic, b.scans_outside_odometry,
       b.log.odometry.size(), c.bag.options.odom_topic, b.laser_frame, b.base_frame, m.x, m.y, m.yaw,
       b.mount_from_tf ? "from TF" : "no transform between them in the bag: zero");
 }
@@ -57,10 +58,11 @@ void setup_convert(CLI::App& sub) {
                  "The ROS bag: an .mcap, .db3 or ROS 1 .bag file, or a rosbag2 folder with "
                  "metadata.yaml")
       ->required();
-  sub.add_option("--out", cmd->out, "The CARMEN log to write (gzip-compressed if it ends in .gz)")
+  add_common_options(sub, cmd->ctx);
+  sub.get_option("--out")
+      ->description("The CARMEN log FILE to write (gzip-compressed if it ends in .gz)")
       ->required();
   add_bag_flags(sub, cmd->bag);
-  sub.add_flag("--json", cmd->json, "Print one JSON object on stdout and nothing else");
   set_examples(sub, {"implicit convert --data run.mcap --out run.log",
                      "implicit convert --data rosbag2_folder --scan-topic /base_scan --odom-topic "
                      "/odom --out run.log.gz --json"});
