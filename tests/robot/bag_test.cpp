@@ -5,12 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "implicit/core/error.hpp"
@@ -288,6 +291,44 @@ TEST(Bag, TruncatedOrCorruptFilesAreRefused) {
                       "bag of format 2.0), got a file that starts with 'FLASER 1 2 3'"),
             std::string::npos);
   EXPECT_NE(bag_error([] { read_bag(kBagDir / "missing.mcap"); }).find("no such file"),
+            std::string::npos);
+}
+
+/// Appends `v` big-endian, after zero padding to its size from the CDR header's end (byte 4).
+template <typename T>
+void bag_put_big_endian(std::string& out, T v) {
+  while ((out.size() - 4) % sizeof(T) != 0) out.push_back('\0');
+  const auto bits =
+      std::bit_cast<std::conditional_t<sizeof(T) == 8, std::uint64_t, std::uint32_t>>(v);
+  for (std::size_t i = sizeof(T); i-- > 0;)
+    out.push_back(static_cast<char>((bits >> (8 * i)) & 0xff));
+}
+
+TEST(Bag, BigEndianCdrIsReadToo) {
+  // A geometry_msgs/PoseStamped in big-endian CDR (encapsulation 00 00), written by hand.
+  std::string m("\0\0\0\0", 4);
+  bag_put_big_endian<std::int32_t>(m, 12);
+  bag_put_big_endian<std::uint32_t>(m, 500000000u);
+  bag_put_big_endian<std::uint32_t>(m, 4u);
+  m.append("map", 4);  // with its NUL
+  for (double v : {1.5, -2.25, 0.0, 0.0, 0.0, std::sin(0.3), std::cos(0.3)})
+    bag_put_big_endian<double>(m, v);
+  const BagPoseMessage p = decode_pose_stamped(m, BagEncoding::kCdr, "be");
+  EXPECT_EQ(p.header.time, 12.5);
+  EXPECT_EQ(p.header.frame_id, "map");
+  EXPECT_EQ(p.pose(0), 1.5);
+  EXPECT_EQ(p.pose(1), -2.25);
+  EXPECT_NEAR(p.pose(2), 0.6, 1e-15);
+  // The same bytes cut short, or with a stamp's nanoseconds of 1e9 or more.
+  EXPECT_NE(bag_error([&] {
+              decode_pose_stamped(m.substr(0, m.size() - 1), BagEncoding::kCdr, "be");
+            }).find("be: byte"),
+            std::string::npos);
+  std::string late = m;
+  late[8] = static_cast<char>(0x7f);
+  EXPECT_NE(bag_error([&] {
+              decode_pose_stamped(late, BagEncoding::kCdr, "be");
+            }).find("header.stamp.nanosec: expected less than 1e9"),
             std::string::npos);
 }
 
