@@ -182,7 +182,9 @@ LaserDataset load_robot_log(const LaserDataOptions& options) {
 LaserDataset load_carmen(const LaserDataOptions& options, const robot::CarmenLog& log) {
   require(!log.scans.empty(), "{}: expected laser scans, got none", options.data.string());
   LaserDataset d;
-  d.name = options.data.filename().string();
+  // A rosbag2 folder may be named with a trailing '/': its name is then the folder's.
+  const std::filesystem::path data = options.data.lexically_normal();
+  d.name = (data.has_filename() ? data : data.parent_path()).filename().string();
   d.scans_in_log = log.scans.size();
   d.mount = mount_of(log);
   const robot::Pose mount_pose(d.mount.x, d.mount.y, d.mount.yaw);
