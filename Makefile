@@ -14,7 +14,7 @@ SANITIZE_CXX ?= clang++-14
 # test_core", checks a part: ctest registers the other test programs as <program>_NOT_BUILT
 # placeholders, which test-sanitize leaves out by name.
 FUZZ_TARGETS = robot_log carpark slam_data results_json occupancy_map carmen_log resume_record \
-  trajectory bag
+  trajectory bag nav2_params
 SANITIZE_TARGETS ?= implicit_cli test_core test_filter test_control test_robot test_slam test_apps \
 	$(addprefix fuzz_,$(FUZZ_TARGETS))
 SANITIZE_EXCLUDE ?= slow|packaging|docs

@@ -9,6 +9,8 @@
 #include "context.hpp"
 #include "experiments.hpp"
 #include "implicit/core/parallel.hpp"
+#include "implicit/robot/bag.hpp"
+#include "nav2_params.hpp"
 #include "plural.hpp"
 #include "registry.hpp"
 
@@ -176,8 +178,18 @@ void setup_mcl(CLI::App& sub) {
                      "implicit mcl --kidnap-at 60 --kidnap-skip 10 --method standard --kld",
                      "implicit mcl --sensor laser --data data/carmen/intel-corrected.log.gz "
                      "--method implicit -M 100 --runs 10 --json"});
-  sub.callback([cmd] {
+  CLI::Option* sensor = sub.get_option("--sensor");
+  sub.callback([cmd, &sub, sensor] {
     ThreadLimit limit(cmd->ctx.threads);
+    if (!cmd->laser.params.empty()) {
+      // nav2's AMCL localizes with a laser: its parameters imply --sensor laser.
+      if (sensor->count() == 0) cmd->laser.sensor = "laser";
+      require(cmd->laser.sensor == "laser",
+              "mcl --params: nav2's AMCL parameters apply to --sensor laser, got --sensor {}",
+              cmd->laser.sensor);
+      cmd->laser.params_record =
+          apply_nav2_params(sub, cmd->laser.params, robot::is_bag(cmd->settings.data_dir));
+    }
     if (cmd->laser.sensor == "laser") {
       run_laser_mcl_command(cmd->settings, cmd->map, cmd->laser, cmd->ctx, cmd->allow_empty);
       return;

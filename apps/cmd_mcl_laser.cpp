@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -115,6 +116,11 @@ void add_laser_options(CLI::App& sub, LaserCommand& l) {
                  "Write the first run's estimate as a TUM trajectory file (t x y z qx qy qz qw), "
                  "for implicit eval")
       ->check(tum_file_validator());
+  sub.add_option("--params", l.params,
+                 "A nav2 parameter file: its amcl block's keys set the laser flags of the same "
+                 "meaning (flags given here win; keys without a meaning here are named on "
+                 "stderr); implies --sensor laser")
+      ->check(CLI::ExistingFile);
   sub.add_option("--truth-trajectory", l.truth_trajectory,
                  "Write the reference the runs are scored against as a TUM file (its steps with a "
                  "known pose)")
@@ -192,11 +198,24 @@ void run_laser_mcl_command(const MclSettings& shared, const std::string& map_fil
   s.kld.enabled = shared.kld;
   s.kld.kld_err = shared.kld_err;
   s.kld.kld_z = shared.kld_z;
+  s.kld.min_particles = static_cast<std::size_t>(shared.min_particles);
+  s.kld.max_particles = static_cast<std::size_t>(shared.max_particles);
   s.recovery.enabled = laser_recovery(shared);
   s.recovery.recovery_alpha_slow = shared.recovery_alpha_slow;
   s.recovery.recovery_alpha_fast = shared.recovery_alpha_fast;
   s.recovery.kidnap_probability = shared.kidnap_probability;
   s.keep_tracks = !l.trajectory.empty();
+  if (l.params_record && !ctx.quiet) {
+    std::string used;
+    for (const auto& [key, what] : l.params_record->used)
+      used += fmt::format("{}{} ({})", used.empty() ? "" : ", ", key, what);
+    fmt::print(stderr, "implicit mcl: --params {}: used {}{}\n", l.params_record->file,
+               used.empty() ? "no key" : used,
+               l.params_record->overridden.empty()
+                   ? ""
+                   : fmt::format("; the command line's flags won over {}",
+                                 fmt::join(l.params_record->overridden, ", ")));
+  }
   const experiments::LaserDataset data = experiments::load_laser_dataset(s.data);
   require(l.alphas.empty() || !data.odometry_recorded(),
           "mcl --sensor laser: --alphas is the noise of odometry synthesised from the reference, "
@@ -207,6 +226,15 @@ void run_laser_mcl_command(const MclSettings& shared, const std::string& map_fil
   bar.finish();
   write_tum_files(l, r, data);
   nlohmann::json j = experiments::to_json(r);
+  if (l.params_record) {
+    const auto& pr = *l.params_record;
+    nlohmann::json used = nlohmann::json::object();
+    for (const auto& [key, what] : pr.used) used[key] = what;
+    j["params"] = {{"file", pr.file},
+                   {"used", used},
+                   {"overridden", pr.overridden},
+                   {"not_used", pr.not_used}};
+  }
   if (!ctx.out_dir.empty()) {
     OutputFile out(ctx.csv_path("laser_mcl.json"));
     out.stream() << j.dump(2) << "\n";

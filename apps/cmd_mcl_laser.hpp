@@ -2,6 +2,7 @@
 // `implicit mcl --sensor laser`: the laser options of the mcl subcommand and their run
 // (experiments/laser_mcl.hpp does the work).
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,7 @@
 #include "context.hpp"
 #include "experiments.hpp"
 #include "experiments/laser_mcl.hpp"
+#include "nav2_params.hpp"
 
 namespace CLI {
 class App;
@@ -25,6 +27,8 @@ struct LaserCommand {
   BagFlags bag;                  ///< a ROS bag as --data: its topics and frames
   std::string trajectory;        ///< TUM file of the first run's estimate
   std::string truth_trajectory;  ///< TUM file of the reference (--truth-trajectory)
+  std::string params;            ///< --params: a nav2 parameter file (its amcl block)
+  std::optional<Nav2ParamsRecord> params_record;  ///< what --params set, for the JSON
 };
 
 /// Adds --sensor and the laser's options to the mcl subcommand.

@@ -70,6 +70,7 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
         {"mcl --data DIR/gone.log", 1, {"gone.log"}},
         {"mcl --label-gate -1", 2, {"--label-gate"}},
         {"mcl --trajectory ''", 2, {"--trajectory"}},
+        {"mcl --params DIR/gone.yaml", 2, {"--params", "gone.yaml"}},
         {"mcl --truth-trajectory DIR/gone/t.tum", 2, {"--truth-trajectory", "gone"}},
         {"mcl --init nowhere", 2, {"--init", "nowhere"}},
         {"mcl --sensor laser --data DIR/gone.mcap --scan-topic ''", 2, {"--scan-topic"}},
