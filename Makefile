@@ -20,7 +20,7 @@ SANITIZE_TARGETS ?= implicit_cli test_core test_filter test_control test_robot t
 SANITIZE_EXCLUDE ?= slow|packaging|docs
 # Each fuzz target runs this many seconds in `make fuzz-smoke` (a smoke test: tens of thousands
 # of inputs per target; `make fuzz-smoke FUZZ_SECONDS=600` for a real session).
-FUZZ_SECONDS ?= 12
+FUZZ_SECONDS ?= 6
 
 .PHONY: all deps configure build test test-slow reproduce reproduce-quick crosscheck bench docs \
 	install format clean configure-sanitize test-sanitize fuzz-smoke
