@@ -72,6 +72,7 @@
 #include "implicit/robot/map_io.hpp"
 #include "implicit/robot/models.hpp"
 #include "implicit/robot/mounted_sensor.hpp"
+#include "implicit/robot/nav2_params.hpp"
 #include "implicit/robot/observation_model.hpp"
 #include "implicit/robot/occupancy_grid.hpp"
 #include "implicit/robot/odometry_model.hpp"
