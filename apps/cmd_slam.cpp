@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "cmd_slam_laser.hpp"
 #include "context.hpp"
 #include "experiments.hpp"
 #include "implicit/core/parallel.hpp"
@@ -27,6 +28,7 @@ struct SlamCommand {
   SlamSettings settings;
   RunContext ctx;
   bool allow_empty = false;
+  GridSlamCommand grid;
 };
 
 void setup_slam(CLI::App& sub) {
@@ -34,16 +36,21 @@ void setup_slam(CLI::App& sub) {
   auto& s = cmd->settings;
   sub.add_option("--method", s.method,
                  "ekf | fastslam1 | fastslam2 | implicit (paper, point landmarks) | implicit-rb "
-                 "(Rao-Blackwellised)")
-      ->check(CLI::IsMember({"ekf", "fastslam1", "fastslam2", "implicit", "implicit-rb"}))
+                 "(Rao-Blackwellised); --sensor laser: bootstrap | gmapping | implicit")
+      ->check(CLI::IsMember(
+          {"ekf", "fastslam1", "fastslam2", "implicit", "implicit-rb", "bootstrap", "gmapping"}))
       ->capture_default_str();
-  sub.add_option("--particles,-M", s.particles, "Particles M (ignored by ekf)")
-      ->check(in_range(1, 1000000))
-      ->capture_default_str();
-  sub.add_option("--datasets", s.datasets,
-                 "Data sets (synthetic seeds seed, seed+1, ...; with --data: repeated runs)")
-      ->check(in_range(1, 100000))
-      ->capture_default_str();
+  cmd->grid.particles = sub.add_option("--particles,-M", s.particles,
+                                       "Particles M (ignored by ekf; --sensor laser: default 30)")
+                            ->check(in_range(1, 1000000))
+                            ->capture_default_str();
+  cmd->grid.datasets =
+      sub.add_option(
+             "--datasets", s.datasets,
+             "Data sets (synthetic seeds seed, seed+1, ...; with --data: repeated runs; --sensor "
+             "laser: runs, default 1)")
+          ->check(in_range(1, 100000))
+          ->capture_default_str();
   sub.add_option("--data", s.data_dir,
                  "Plain-text robot log (or a folder of *.log[.gz]) instead of synthetic data, e.g. "
                  "data/victoria_park/victoria_park.log.gz");
@@ -111,14 +118,36 @@ void setup_slam(CLI::App& sub) {
   sub.add_option("--truth-trajectory", s.truth_trajectory,
                  "Write the first data set's truth (its steps with a known pose) as a TUM file")
       ->check(tum_file_validator());
+  add_grid_slam_options(sub, cmd->grid);
+  for (const char* name :
+       {"--association", "--truth", "--laser-every", "--noise-scale", "--control-noise",
+        "--dense-landmarks", "--dense-laps", "--min-range", "--range-sd", "--bearing-sd",
+        "--gate-chi2", "--new-landmark-density", "--model", "--control-sd", "--state-sd"})
+    cmd->grid.landmark_only.push_back(sub.get_option(name));
   add_common_options(sub, cmd->ctx);
   set_examples(sub, {"implicit slam --method implicit-rb --particles 100 --datasets 10 --json",
                      "implicit slam --method ekf --datasets 50 --out out/slam",
                      "implicit slam --model unicycle --data u.log.gz --method implicit-rb -M 100",
                      "implicit slam --method fastslam2 --association ml --data "
-                     "data/victoria_park/victoria_park.log.gz --datasets 1 --json"});
-  sub.callback([cmd] {
+                     "data/victoria_park/victoria_park.log.gz --datasets 1 --json",
+                     "implicit slam --sensor laser --data data/carmen/intel-corrected.log.gz "
+                     "--method implicit -M 8 --datasets 3 --map-out out/intel.yaml --json"});
+  CLI::Option* alphas = sub.get_option("--alphas");
+  CLI::Option* max_scans = sub.get_option("--max-scans");
+  CLI::Option* map_out = sub.get_option("--map-out");
+  sub.callback([cmd, alphas, max_scans, map_out] {
     ThreadLimit limit(cmd->ctx.threads);
+    if (cmd->grid.sensor == "laser") {
+      run_grid_slam_command(cmd->settings, cmd->grid, cmd->ctx);
+      return;
+    }
+    if (cmd->settings.method == "bootstrap" || cmd->settings.method == "gmapping")
+      throw CLI::ValidationError(
+          "--method",
+          fmt::format("{} is a grid-SLAM proposal; it needs --sensor laser", cmd->settings.method));
+    for (const CLI::Option* o : {alphas, max_scans, map_out})
+      if (o->count() > 0)
+        throw CLI::ValidationError(o->get_name(), "applies to grid SLAM (--sensor laser)");
     const auto r = run_slam(cmd->settings, cmd->ctx);
     const auto check = [&] {
       require_scored(r, "slam", {"error_percent_mean", "rmse_pose_m"},

@@ -94,7 +94,16 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
         {"slam --data DIR/gone.log", 1, {"gone.log"}},
         {"slam --control-noise nan", 2, {"--control-noise"}},
         {"slam --trajectory DIR/gone/e.tum", 2, {"--trajectory", "gone"}},
-        {"slam --truth-trajectory ''", 2, {"--truth-trajectory"}}}},
+        {"slam --truth-trajectory ''", 2, {"--truth-trajectory"}},
+        {"slam --sensor laser --method ekf --data DIR/a.log", 2, {"--method", "ekf"}},
+        {"slam --sensor laser --method implicit", 2, {"--data"}},
+        {"slam --sensor laser --gate-chi2 4 --data DIR/a.log", 2, {"--gate-chi2"}},
+        {"slam --method gmapping", 2, {"--method", "--sensor laser"}},
+        {"slam --alphas 0.1 0.1 0.1 0.1", 2, {"--alphas"}},
+        {"slam --sensor laser --alphas 0.1 -1 0.1 0.1", 2, {"--alphas"}},
+        {"slam --sensor laser --max-scans x", 2, {"--max-scans"}},
+        {"slam --sensor laser --map-out ''", 2, {"--map-out"}},
+        {"slam --sensor laser --data DIR/gone.log.gz", 1, {"gone.log.gz"}}}},
       {"slit", {{"slit --runs 0", 2, {"--runs"}}, {"slit --mode nope", 2, {"--mode", "nope"}}}},
   };
   return rows;

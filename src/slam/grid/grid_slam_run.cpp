@@ -82,6 +82,7 @@ GridSlamRun run_grid_slam(const robot::CarmenLog& log, const GridSlamRunOptions&
     run.resamplings += s.resampled;
     run.fallbacks += static_cast<std::size_t>(s.fallbacks);
     run.failures += static_cast<std::size_t>(s.failures);
+    if (options.on_step) options.on_step(i + 1, used.size());
   }
   run.cpu_seconds = static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;
   run.processed = used.size();

@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string_view>
 #include <vector>
@@ -47,6 +48,8 @@ struct GridSlamRunOptions {
   ScanMatchProposalOptions scan_match;
   std::uint64_t data_seed = 1;  ///< the odometry's noise: stream (data_seed, scan, 0, data)
   std::size_t max_scans = 0;    ///< 0: every scan of the log; else the first max_scans
+  /// Called after each processed scan with (scans done, scans to process): progress.
+  std::function<void(std::size_t, std::size_t)> on_step;
   void validate() const;
 };
 

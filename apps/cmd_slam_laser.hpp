@@ -1,0 +1,36 @@
+#pragma once
+// `implicit slam --sensor laser`: grid SLAM on a CARMEN laser log by the semi-synthetic protocol
+// (slam/grid/grid_slam_run.hpp does the work; docs/cli.md, "Grid SLAM").
+
+#include <string>
+#include <vector>
+
+#include "context.hpp"
+#include "experiments.hpp"
+
+namespace CLI {
+class App;
+class Option;
+}  // namespace CLI
+
+namespace implicit::app {
+
+struct GridSlamCommand {
+  std::string sensor = "landmark";  ///< landmark | laser
+  std::vector<double> alphas;       ///< the odometry noise (empty: the runner's)
+  int max_scans = 0;                ///< 0: every scan
+  std::string map_out;              ///< the first run's map as map_server YAML + PGM
+  /// The landmark options, refused with --sensor laser (they would be silently ignored).
+  std::vector<CLI::Option*> landmark_only;
+  CLI::Option *particles = nullptr, *datasets = nullptr;
+};
+
+/// Adds --sensor and the grid-SLAM options to the slam subcommand.
+void add_grid_slam_options(CLI::App& sub, GridSlamCommand& g);
+
+/// Runs grid SLAM with the slam subcommand's shared settings (method, particles, data sets as
+/// seeds, data, trajectory files) and prints JSON or a summary.
+void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
+                           const RunContext& ctx);
+
+}  // namespace implicit::app
