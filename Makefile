@@ -59,11 +59,12 @@ configure-sanitize: deps
 
 # The slowest sanitized test starts first instead of running alone at the end: on a fresh build
 # ctest knows no costs, so one is seeded (ctest's own cost file, kept if present).
-SANITIZE_FIRST ?= ArmExperiment.GenericAndClosedFormGiveTheSameClosedLoop
-# Left out under the sanitizers for CI's time budget: the whole quick reproduce (5.5 min of one
-# core there, a fifth of the sanitized suite). `make test` runs it; under the sanitizers each
-# experiment's code still runs through its own tests and the `--only arm` quick reproduces.
-SANITIZE_SKIP ?= ^Reproduce\.QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperiment$$
+SANITIZE_FIRST ?= Cli.EveryOutputErrorNamesOutAndThePath
+# Left out under the sanitizers for CI's time budget, all run by `make test`: the whole quick
+# reproduce (5.5 min of one core there, a fifth of the sanitized suite) and the longest statistical
+# runs (2.5 min of one core together), whose code the shorter sanitized tests of the same classes
+# run as well (the arm experiment also through the `--only arm` quick reproduces).
+SANITIZE_SKIP ?= ^(Reproduce\.QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperiment|ArmExperiment\.GenericAndClosedFormGiveTheSameClosedLoop|DoubleSlitGeneric\.LogPsiAgreesWithTheExactSolution|PathIntegral\.TwoWallsInThePlaneAgreeWithPlainMonteCarlo|PathIntegral\.HardWallMixtureReproducesTheDoubleSlit|GlobalRun\.BothSourcesConvergeOnAnAsymmetricMap|Determinism\.DynamicSizeSameBitsForAnyThreadCount)$$
 test-sanitize: configure-sanitize
 	@cmake --build $(SANITIZE_DIR) -j $(JOBS) --target $(SANITIZE_TARGETS)
 	@mkdir -p $(SANITIZE_DIR)/Testing/Temporary
