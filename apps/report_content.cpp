@@ -29,8 +29,8 @@ namespace {
 
 // Experiment names are results.json's keys; what the summary says of each is text.
 const std::vector<std::string> kSummaryExperiments = {
-    "slit", "arm",           "himmelblau",          "mcl",
-    "slam", "proposal_gain", "global_localization", "laser_mcl"};
+    "slit",      "arm",      "himmelblau", "mcl", "slam", "proposal_gain", "global_localization",
+    "laser_mcl", "grid_slam"};
 
 void introduction(Document& doc, const json& results, const Numbers& numbers) {
   const Text& text = numbers.text;
@@ -128,6 +128,7 @@ Document build_report_with(const json& results, const std::filesystem::path& dir
   proposal_gain_section(doc, results, numbers);
   global_localization_section(doc, results, numbers);
   laser_mcl_section(doc, results, numbers);
+  grid_slam_section(doc, results, numbers);
   closing(doc, results, numbers.text);
   return doc;
 }

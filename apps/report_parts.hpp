@@ -87,5 +87,6 @@ void slam_section(Document& doc, const json& results, const Numbers& numbers);
 void proposal_gain_section(Document& doc, const json& results, const Numbers& numbers);
 void global_localization_section(Document& doc, const json& results, const Numbers& numbers);
 void laser_mcl_section(Document& doc, const json& results, const Numbers& numbers);
+void grid_slam_section(Document& doc, const json& results, const Numbers& numbers);
 
 }  // namespace implicit::app::report::parts

@@ -273,6 +273,7 @@ Plan make_plan(bool quick, const std::vector<std::string>& only) {
   }
   if (selected("global_localization")) add_global_localization(plan, quick);
   if (selected("laser_mcl")) add_laser_mcl(plan, quick);
+  if (selected("grid_slam")) add_grid_slam(plan, quick);
   return plan;
 }
 

@@ -33,4 +33,8 @@ Plan make_plan(bool quick, const std::vector<std::string>& only);
 /// Adds the laser_mcl experiment (apps/reproduce_laser.cpp): laser MCL on the bundled ACES log.
 void add_laser_mcl(Plan& plan, bool quick);
 
+/// Adds the grid_slam experiment (apps/reproduce_grid_slam.cpp): grid SLAM on the bundled laser
+/// logs with the three proposals.
+void add_grid_slam(Plan& plan, bool quick);
+
 }  // namespace implicit::app

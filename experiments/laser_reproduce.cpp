@@ -35,17 +35,6 @@ void write_figure_csv(const std::filesystem::path& file, const std::string& text
   write_output_file(file, text, "laser_mcl figure");
 }
 
-std::string map_csv(const robot::OccupancyGrid& map) {
-  std::string out = "x_m,y_m,resolution_m\n";
-  for (int iy = 0; iy < map.height(); ++iy)
-    for (int ix = 0; ix < map.width(); ++ix)
-      if (map.is_occupied(ix, iy)) {
-        const Vec<2> c = map.cell_center(ix, iy);
-        out += fmt::format("{:.3f},{:.3f},{}\n", c(0), c(1), map.resolution());
-      }
-  return out;
-}
-
 std::string reference_csv(const LaserDataset& d) {
   std::string out = "update,time_s,x_m,y_m,heading_rad\n";
   for (std::size_t k = 0; k < d.reference.size(); ++k) {
@@ -89,6 +78,17 @@ nlohmann::json median_of_converged(const std::vector<LaserMclRun>& runs) {
 
 }  // namespace
 
+std::string occupied_cells_csv(const robot::OccupancyGrid& map) {
+  std::string out = "x_m,y_m,resolution_m\n";
+  for (int iy = 0; iy < map.height(); ++iy)
+    for (int ix = 0; ix < map.width(); ++ix)
+      if (map.is_occupied(ix, iy)) {
+        const Vec<2> c = map.cell_center(ix, iy);
+        out += fmt::format("{:.3f},{:.3f},{}\n", c(0), c(1), map.resolution());
+      }
+  return out;
+}
+
 CachedDataset cached_laser_dataset(const LaserDataOptions& options) {
   static std::mutex mutex;
   static std::map<std::string, CachedDataset> cache;
@@ -119,7 +119,7 @@ void write_laser_figure_files(const LaserMclResult& r, const LaserDataset& d,
   std::filesystem::create_directories(dir, ec);
   require(!ec, "laser_mcl figure: expected a folder '{}' for the figure's files, got: {}",
           dir.string(), ec.message());
-  write_figure_csv(dir / "laser_mcl_map.csv", map_csv(d.map));
+  write_figure_csv(dir / "laser_mcl_map.csv", occupied_cells_csv(d.map));
   write_figure_csv(dir / "laser_mcl_reference.csv", reference_csv(d));
   write_figure_csv(dir / fmt::format("laser_mcl_track_{}.csv", to_string(r.settings.proposal)),
                    track_csv(r, d));

@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
@@ -30,6 +31,10 @@ struct CachedDataset {
 /// field of `options` (the dataset is a function of them alone, so the cache changes no result).
 /// Thread-safe.
 CachedDataset cached_laser_dataset(const LaserDataOptions& options);
+
+/// "x_m,y_m,resolution_m" and one line per occupied cell of `map` (its centre): the map of the
+/// laser figures.
+std::string occupied_cells_csv(const robot::OccupancyGrid& map);
 
 /// The figure's files in `dir` (figure10.py reads them):
 ///   laser_mcl_map.csv                x_m,y_m,resolution_m: the occupied cells' centres

@@ -242,3 +242,28 @@ def figure_main(draw, argv=None):
     except DataError as e:
         print(f"{script}: error: {e}", file=sys.stderr)
         sys.exit(1)
+
+
+# Cells per image pixel at most: a 5 cm wall is far below a pixel of the panel, so blocks of
+# cells are drawn occupied when any of their cells is.
+MAP_PIXELS = 500
+
+
+def map_image(cells, name):
+    """The occupied cells as an image (1 occupied, 0 not), pooled to about MAP_PIXELS across,
+    and its extent in metres."""
+    res = cells["resolution_m"]
+    if not np.all(np.isfinite(res)) or np.any(res <= 0) or np.ptp(res) > 0:
+        raise DataError(f"{name}: column 'resolution_m': expected one positive value in every "
+                        f"row, got {np.unique(res)[:5]}")
+    h = float(res[0])
+    x0, y0 = cells["x_m"].min(), cells["y_m"].min()
+    ix = np.rint((cells["x_m"] - x0) / h).astype(int)
+    iy = np.rint((cells["y_m"] - y0) / h).astype(int)
+    block = max(1, int(np.ceil(max(ix.max(), iy.max()) / MAP_PIXELS)))
+    ix, iy = ix // block, iy // block
+    image = np.zeros((iy.max() + 1, ix.max() + 1))
+    image[iy, ix] = 1.0
+    b = h * block
+    left, bottom = x0 - h / 2, y0 - h / 2
+    return image, (left, left + b * (ix.max() + 1), bottom, bottom + b * (iy.max() + 1))

@@ -18,40 +18,15 @@ Writes <dir>/figure10.png and <dir>/figure10.svg.
 import numpy as np
 from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
-from common import COLORS, DataError, figure_main, load_csv, save, subplots
+from common import COLORS, figure_main, load_csv, map_image, save, subplots
 
 PROPOSALS = (("implicit", "implicit MCL"), ("bootstrap", "bootstrap MCL"))
 # An exact zero error would leave the log axis; errors below a millimetre are drawn at it.
 ERROR_FLOOR = 1e-3
-
-
-# Cells per image pixel at most: a 5 cm wall is far below a pixel of the panel, so blocks of
-# cells are drawn occupied when any of their cells is.
-MAP_PIXELS = 500
 # The least margin around the paths in the map panel [m].
 PATH_MARGIN_M = 3.0
 # Height over width of the map panel's zoom window (about the panel's own shape).
 PANEL_ASPECT = 0.85
-
-
-def map_image(cells, name):
-    """The occupied cells as an image (1 occupied, 0 not), pooled to about MAP_PIXELS across,
-    and its extent in metres."""
-    res = cells["resolution_m"]
-    if not np.all(np.isfinite(res)) or np.any(res <= 0) or np.ptp(res) > 0:
-        raise DataError(f"{name}: column 'resolution_m': expected one positive value in every "
-                        f"row, got {np.unique(res)[:5]}")
-    h = float(res[0])
-    x0, y0 = cells["x_m"].min(), cells["y_m"].min()
-    ix = np.rint((cells["x_m"] - x0) / h).astype(int)
-    iy = np.rint((cells["y_m"] - y0) / h).astype(int)
-    block = max(1, int(np.ceil(max(ix.max(), iy.max()) / MAP_PIXELS)))
-    ix, iy = ix // block, iy // block
-    image = np.zeros((iy.max() + 1, ix.max() + 1))
-    image[iy, ix] = 1.0
-    b = h * block
-    left, bottom = x0 - h / 2, y0 - h / 2
-    return image, (left, left + b * (ix.max() + 1), bottom, bottom + b * (iy.max() + 1))
 
 
 def draw(d):

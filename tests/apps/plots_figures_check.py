@@ -8,7 +8,8 @@ matplotlib's API rather than by eye, what a reader of the figure sees:
   bounding boxes from the renderer);
 - Figure 8: the Car Park configurations A and B have different markers;
 - Figure 9: all panels have one y-range, and each a legend naming its runs;
-- Figure 10: the map panel is zoomed to the path (a short path on a large map is not a few pixels).
+- Figure 10: the map panel is zoomed to the path (a short path on a large map is not a few pixels);
+- Figure 11: the map panel shows the whole map and every path.
 
 The data are chosen so that matplotlib's own ticks label only one tick on several log axes (CPU
 times from 0.004 to 0.06 ms, step lengths from 0.02 to 0.4 s, a narrow RMSE range), and so that
@@ -148,6 +149,18 @@ def make_data():
                   [(k, 0.5 * k, 0.2 * k, 0.5 + scale * (k % 3) / 2, 0.0,
                     max(0.01, scale * (k % 3) / 2), m) for k in range(20)])
 
+    # Figure 11: a 20 m x 10 m room, a path around it; relation errors from 0.002 to 0.3 m (the
+    # first scan has none: an empty field).
+    write_csv("grid_slam_map.csv", ["x_m", "y_m", "resolution_m"],
+              [(0.05 * i, y, 0.05) for i in range(401) for y in (-5.0, 5.0)])
+    write_csv("grid_slam_reference.csv", ["scan", "time_s", "x_m", "y_m", "heading_rad"],
+              [(k, 2.0 * k, 0.5 * k, 0.0, 0.0) for k in range(30)])
+    for proposal, scale in (("implicit", 0.002), ("gmapping", 0.01), ("bootstrap", 0.3)):
+        write_csv(f"grid_slam_track_{proposal}.csv",
+                  ["scan", "time_s", "x_m", "y_m", "heading_rad", "relation_error_m"],
+                  [(k, 2.0 * k, 0.5 * k, scale * (k % 4), 0.0,
+                    "" if k == 0 else scale * (1 + k % 4)) for k in range(30)])
+
 
 # ---- What a reader sees ---------------------------------------------------------------------
 
@@ -262,6 +275,16 @@ def check_figure10(fig):
           f"figure10: the map panel x {x0:.1f}..{x1:.1f}, y {y0:.1f}..{y1:.1f} cuts the path")
 
 
+def check_figure11(fig):
+    ax = fig.axes[0]
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    # The map spans x 0..20 m and y -5..5 m; the paths lie inside it.
+    check(x0 <= -0.025 and x1 >= 20.025 and y0 <= -5.025 and y1 >= 5.025,
+          f"figure11: the map panel x {x0:.1f}..{x1:.1f}, y {y0:.1f}..{y1:.1f} cuts the map")
+    names = [t.get_text() for t in ax.get_legend().get_texts()] if ax.get_legend() else []
+    check(len(names) == 4, f"figure11: expected the reference and three proposals, got {names}")
+
+
 def check_helper():
     """label_log_axis on ranges matplotlib labels once or never, and one it labels well."""
     for lo, hi in ((0.004, 0.06), (0.02, 0.4), (0.11, 0.13), (1.001, 1.002), (1e-3, 1e3),
@@ -284,11 +307,12 @@ def check_helper():
 
 make_data()
 check_helper()
-for number in (1, 2, 4, 5, 6, 7, 8, 9, 10):
+for number in (1, 2, 4, 5, 6, 7, 8, 9, 10, 11):
     figure = render(number)
     check_log_axes(figure, f"figure{number}")
     check_texts_apart(figure, f"figure{number}")
-    {8: check_figure8, 9: check_figure9, 10: check_figure10}.get(number, lambda f: None)(figure)
+    {8: check_figure8, 9: check_figure9, 10: check_figure10,
+     11: check_figure11}.get(number, lambda f: None)(figure)
     check((tmp / f"figure{number}.png").is_file(), f"figure{number}: no PNG written")
 
 if FAILURES:

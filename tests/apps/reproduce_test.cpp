@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "apps/cli_runner.hpp"
@@ -31,9 +32,9 @@ bool require_all() {
 
 // Which figures and table files each experiment produces.
 const std::map<std::string, std::vector<int>> kFigures = {
-    {"slit", {1, 2}},   {"arm", {4}},  {"himmelblau", {5}},
-    {"mcl", {6}},       {"slam", {7}}, {"global_localization", {9}},
-    {"laser_mcl", {10}}};
+    {"slit", {1, 2}},    {"arm", {4}},       {"himmelblau", {5}},
+    {"mcl", {6}},        {"slam", {7}},      {"global_localization", {9}},
+    {"laser_mcl", {10}}, {"grid_slam", {11}}};
 const std::map<std::string, std::string> kTables = {{"slit", "table2_slit.csv"},
                                                     {"himmelblau", "table4_himmelblau.csv"},
                                                     {"mcl", "table5_mcl.csv"},
@@ -161,6 +162,26 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
       loads += run["result"]["dataset"]["from_cache"] == false ? 1 : 0;
     }
     EXPECT_EQ(loads, 1);
+  }
+
+  // grid_slam: the figure's files (the first run of each proposal on the quick run's ACES scans,
+  // one row per processed scan), and the processed scans the same for every proposal.
+  if (results["experiments"]["grid_slam"].value("status", "") == "ok") {
+    for (const char* f :
+         {"grid_slam_map.csv", "grid_slam_reference.csv", "grid_slam_track_implicit.csv",
+          "grid_slam_track_gmapping.csv", "grid_slam_track_bootstrap.csv"})
+      EXPECT_TRUE(std::filesystem::exists(dir.path() / f)) << f;
+    const auto& runs = results["experiments"]["grid_slam"]["runs"];
+    ASSERT_EQ(runs.size(), 3u);
+    const int scans = runs[0]["result"]["scans_processed"].get<int>();
+    EXPECT_GT(scans, 1);
+    EXPECT_EQ(data_rows(dir.path() / "grid_slam_reference.csv"), scans);
+    for (const char* p : {"implicit", "gmapping", "bootstrap"})
+      EXPECT_EQ(data_rows(dir.path() / fmt::format("grid_slam_track_{}.csv", p)), scans) << p;
+    for (const auto& run : runs) {
+      EXPECT_EQ(run["result"]["scans_processed"], scans) << run["label"];
+      EXPECT_EQ(run["result"]["datasets"], 2) << run["label"];
+    }
   }
 
   // The report can be rebuilt from results.json alone.
