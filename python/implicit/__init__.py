@@ -9,9 +9,10 @@ Core (spec §1):
     ess(weights), log_sum_exp(a)
 
 Robotics (spec §3): implicit.models (Ute, Unicycle, RangeBearing), implicit.data (carpark(),
-victoria_park(), read_log(), simulate(), steps()), ParticleFilter, implicit.slam (Filter, run),
-implicit.mcl.run; implicit.laser (occupancy grids, CARMEN logs, the likelihood field, the
-odometry model, a laser ParticleFilter and run). Control (spec §2): implicit.control.
+victoria_park(), read_log(), simulate(), steps()), ParticleFilter, implicit.slam (Filter, run;
+grid: grid SLAM on a laser log, its map a numpy array), implicit.mcl.run; implicit.laser
+(occupancy grids, CARMEN logs, the likelihood field, the odometry model, a laser ParticleFilter
+and run). Control (spec §2): implicit.control.
 Trajectory scoring (APE, RPE as evo computes them): implicit.eval.
 
 Errors are raised as implicit.InvalidArgument (a ValueError) with the library's message.

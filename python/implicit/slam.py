@@ -8,11 +8,19 @@
 
 Methods: "ekf", "fastslam1", "fastslam2", "implicit", "implicit-rb"; association "known"
 (column 0 of the detections is the landmark's id) or "ml" (maximum likelihood).
+
+Grid SLAM on a laser log (spec §3.13), `implicit slam --sensor laser` with one seed:
+
+    r = implicit.slam.grid(implicit.laser.bundled_log("aces"), method="implicit",
+                           particles=8, max_scans=200)
+    r["trajectory"], r["reference"]   # (n, 3) poses at the processed scans
+    r["map"]                          # int8 (height, width), -1 unknown, 0..100; row 0 lowest y
+    r["relation_translation_m"]       # the relation error, beside the odometry's
 """
 from . import _implicit, _runs
 from ._implicit.slam import Filter
 
-__all__ = ["Filter", "run"]
+__all__ = ["Filter", "grid", "run"]
 
 
 def run(method="implicit", particles=100, datasets=50, seed=1, data=None, association="known",
@@ -42,3 +50,60 @@ def run(method="implicit", particles=100, datasets=50, seed=1, data=None, associ
         bearing_sd=bearing_sd, gate_chi2=gate_chi2, new_landmark_density=new_landmark_density,
         model=model, control_sd=control_sd, state_sd=state_sd)
     return _runs.call(_implicit._run_slam, settings, seed, out, threads)
+
+
+def grid(data, method="implicit", particles=30, seed=1, alphas=(0.002,) * 4, max_scans=0,
+         threads=0, progress=None):
+    """Grid SLAM on a CARMEN laser log: one run of `implicit slam --sensor laser` (spec §3.13).
+
+    Every particle carries its own occupancy grid; the proposal is "bootstrap" (the odometry
+    motion model), "gmapping" (scan matching against the particle's map, GMapping's weights) or
+    "implicit" (Newton's method on the pose's negative log posterior, exact weights). The run
+    follows the semi-synthetic protocol of spec §3.13.4: odometry is synthesised from the log's
+    corrected poses with the noise `alphas`, the filter uses the same motion model, and the
+    estimate is scored by the relation error of consecutive processed scans against the
+    corrected poses (docs/cli.md, "Grid SLAM on a laser log").
+
+    Each argument is the tool's flag of the same name, with the tool's default: data the log
+    (--data: a str or os.PathLike naming a CARMEN file, plain or gzip, or the dict
+    implicit.laser.read_carmen returns; bundled_log("aces") is one), method (--method),
+    particles (-M, in [1, 10^6]), seed (--seed: the odometry's noise and the filter's draws),
+    alphas alpha1..alpha4 of the odometry noise and of the filter's motion model (--alphas, each
+    in [0, 10]), max_scans the first N scans of the log (--max-scans; 0: all; of these the
+    filter processes those where the corrected pose moved past the map-update gate), threads
+    (--threads; 0: all cores; the results do not depend on it). The tool's --datasets N runs
+    seeds seed, seed + 1, ...: grid(seed=s + r) is its run r. progress, if given, is called as
+    progress(done, total) after each scan the filter steps on: done = 2 .. total, total the
+    scans processed (scan 1 only starts the filter); an exception it raises stops the run and
+    reaches the caller.
+
+    Returns:
+        dict: trajectory (n, 3) the best particle's poses (x [m], y [m], heading [rad]) at the n
+        processed scans, reference (n, 3) the corrected poses there, times (n,) the scans' times
+        [s]; map (height, width) int8 the best particle's occupancy grid as map_server values
+        (-1 unknown, 0 free .. 100 occupied), row 0 the lowest y (an image shows the highest y
+        first: np.flipud(r["map"]), or origin="lower" in matplotlib's imshow), resolution [m]
+        and origin (x, y) [m] of cell [0, 0]'s lower-left corner, grid the same map as an
+        implicit.laser.OccupancyGrid (save_map(r["grid"], "map.yaml") writes the files of
+        --map-out; None if no beam hit anything); relation_translation_m, relation_rotation_deg
+        and odometry_relation_translation_m, odometry_relation_rotation_deg (the synthesised
+        odometry's, what the scans improve on); cpu_seconds (the filter's process CPU time),
+        resamplings, ess_fraction (mean ESS/M), evaluations_per_particle_and_scan, fallbacks
+        (particles that sampled the motion model instead of their proposal), failures (weight
+        zero); scans_processed (= n) and the settings (data, method, particles, seed, alphas).
+        The numbers are those of `implicit slam --sensor laser --json` for the same settings
+        and seed.
+
+    Raises:
+        implicit.InvalidArgument (a ValueError) naming the argument, for a wrong type or a value
+        out of the flag's range, before the log is read; implicit.ParseError (a ValueError) for
+        a malformed log, naming the file and line.
+
+    Example::
+
+        r = implicit.slam.grid(implicit.laser.bundled_log("aces"), particles=8, max_scans=100)
+        r["map"].shape, r["relation_translation_m"], r["odometry_relation_translation_m"]
+    """
+    settings = dict(data=data, method=method, particles=particles, seed=seed, alphas=alphas,
+                    max_scans=max_scans, threads=threads)
+    return _implicit.slam._grid(settings, progress)

@@ -1,4 +1,5 @@
-from typing import Any, Optional, Union
+from os import PathLike
+from typing import Any, Callable, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -29,3 +30,16 @@ def run(method: str = "implicit", particles: int = 100, datasets: int = 50, seed
         new_landmark_density: float = 0.0, model: Optional[str] = None,
         control_sd: Optional[list[float]] = None, state_sd: Optional[list[float]] = None,
         out: Optional[str] = None, threads: int = 0) -> dict[str, Any]: ...
+
+def grid(data: Union[str, "PathLike[str]", dict[str, Any]], method: str = "implicit",
+         particles: int = 30, seed: int = 1,
+         alphas: npt.ArrayLike = (0.002, 0.002, 0.002, 0.002), max_scans: int = 0,
+         threads: int = 0,
+         progress: Optional[Callable[[int, int], Any]] = None) -> dict[str, Any]:
+    """Grid SLAM on a CARMEN laser log, one run of `implicit slam --sensor laser`: trajectory
+    and reference (n, 3), times (n,), map int8 (height, width) (-1 unknown, 0..100; row 0 the
+    lowest y), resolution, origin, grid (an implicit.laser.OccupancyGrid or None), the relation
+    errors of the estimate and of the odometry, cpu_seconds, resamplings, ess_fraction,
+    evaluations_per_particle_and_scan, fallbacks, failures, scans_processed and the settings."""
+def _grid(settings: dict[str, Any],
+          progress: Optional[Callable[[int, int], Any]] = None) -> dict[str, Any]: ...

@@ -13,6 +13,7 @@ void init_data(py::module_& m);
 void init_bag(py::module_& m);
 void init_filter(py::module_& m);
 void init_slam(py::module_& m);
+void init_grid_slam(py::module_& m);
 void init_runs(py::module_& m);
 void init_control(py::module_& m);
 void init_laser(py::module_& m);
@@ -34,6 +35,7 @@ PYBIND11_MODULE(_implicit, m) {
   ip::init_filter(m);
   auto slam = m.def_submodule("slam", "SLAM filters.");
   ip::init_slam(slam);
+  ip::init_grid_slam(slam);
   ip::init_runs(m);
   auto control = m.def_submodule("control", "Path integral control problems.");
   ip::init_control(control);
