@@ -69,6 +69,7 @@
 #include "implicit/robot/laser_scan.hpp"
 #include "implicit/robot/likelihood_field.hpp"
 #include "implicit/robot/log_format.hpp"
+#include "implicit/robot/map_comparison.hpp"
 #include "implicit/robot/map_io.hpp"
 #include "implicit/robot/models.hpp"
 #include "implicit/robot/mounted_sensor.hpp"
