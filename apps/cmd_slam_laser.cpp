@@ -7,6 +7,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
@@ -52,6 +55,64 @@ GridSlamSummaryStat grid_slam_stat(const std::vector<double>& v) {
   s.se = v.size() > 1 ? sd_of(v) / std::sqrt(static_cast<double>(v.size())) : 0.0;
   return s;
 }
+
+// The map scores of the runs (spec §3.13.5): each fraction may be absent from a run (nothing to
+// count), so the statistics are over the runs that have it, and null in JSON when none has.
+struct GridSlamMapScores {
+  static constexpr const char* kKeys[] = {"map_agreement", "map_occupied_precision",
+                                          "map_occupied_recall", "map_f1"};
+  std::vector<double> filter[4], odometry[4];
+  std::vector<double> reference_cpu, score_cpu;
+  double tolerance_m = 0.0;
+
+  static std::optional<double> field(const robot::MapComparison& s, int k) {
+    const std::optional<double> f[4] = {s.agreement, s.occupied_precision, s.occupied_recall,
+                                        s.occupied_f1};
+    return f[k];
+  }
+  static nlohmann::json value(const std::optional<double>& v) {
+    return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+  }
+  static nlohmann::json mean_or_null(const std::vector<double>& v) {
+    return v.empty() ? nlohmann::json(nullptr) : nlohmann::json(mean_of(v));
+  }
+  // Adds the run's scores to the statistics and to its per_run entry.
+  void add(const slam::GridSlamRun& run, nlohmann::json& per_run) {
+    if (!run.map_score || !run.odometry_map_score) return;
+    tolerance_m = run.map_score->tolerance_m;
+    for (int k = 0; k < 4; ++k) {
+      const std::optional<double> f = field(*run.map_score, k),
+                                  o = field(*run.odometry_map_score, k);
+      if (f) filter[k].push_back(*f);
+      if (o) odometry[k].push_back(*o);
+      per_run[kKeys[k]] = value(f);
+    }
+    reference_cpu.push_back(run.reference_map_cpu_seconds);
+    score_cpu.push_back(run.map_score_cpu_seconds);
+  }
+  void to_json(nlohmann::json& j) const {
+    j["map_tolerance_m"] = tolerance_m;
+    for (int k = 0; k < 4; ++k) {
+      const auto& v = filter[k];
+      const double se = v.size() > 1 ? sd_of(v) / std::sqrt(static_cast<double>(v.size())) : 0.0;
+      j[kKeys[k]] = {{"mean", mean_or_null(v)},
+                     {"se", v.empty() ? nlohmann::json(nullptr) : nlohmann::json(se)}};
+      j[std::string("odometry_") + kKeys[k]] = mean_or_null(odometry[k]);
+    }
+    j["reference_map_cpu_s"] = mean_or_null(reference_cpu);
+    j["map_score_cpu_s"] = mean_or_null(score_cpu);
+  }
+  std::string text() const {
+    const auto f = [](const std::vector<double>& v) {
+      return v.empty() ? std::string("n/a") : fmt::format("{:.3f}", mean_of(v));
+    };
+    return fmt::format(
+        "  map against the reference poses' map: agreement {}, occupied precision {}, recall {}, "
+        "F1 {} within {:.3f} m (odometry alone: {}, {}, {}, {})\n",
+        f(filter[0]), f(filter[1]), f(filter[2]), f(filter[3]), tolerance_m, f(odometry[0]),
+        f(odometry[1]), f(odometry[2]), f(odometry[3]));
+  }
+};
 
 void write_grid_slam_tum(const std::string& file, std::string_view flag,
                          const std::vector<slam::GridSlamPose>& poses) {
@@ -109,6 +170,7 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
   std::vector<double> trans, rot, odo_trans, odo_rot, cpu_scan, ess, evals, resamplings;
   std::size_t fallbacks = 0, failures = 0, processed = 0;
   nlohmann::json per_run = nlohmann::json::array();
+  GridSlamMapScores maps;
   double log_seconds = 0.0;
   for (int r = 0; r < runs; ++r) {
     slam::GridSlamRunOptions ro = o;
@@ -141,6 +203,7 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
                        {"relation_rotation_deg", run.relations.rotation_mean_deg},
                        {"cpu_ms_per_scan", cpu_scan.back()},
                        {"resamplings", run.resamplings}});
+    maps.add(run, per_run.back());
     if (r != 0) continue;
     if (!shared.trajectory.empty())
       write_grid_slam_tum(shared.trajectory, "slam --trajectory", run.trajectory);
@@ -173,6 +236,7 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
   j["resamplings_mean"] = mean_of(resamplings);
   j["fallbacks"] = fallbacks;
   j["failures"] = failures;
+  maps.to_json(j);
   j["per_run"] = per_run;
   if (ctx.json) {
     print_json(j);
@@ -185,6 +249,7 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
       shared.data_dir, shared.method, o.filter.particles, runs, runs == 1 ? "" : "s", processed,
       t.mean, t.se, rt.mean, mean_of(odo_trans), mean_of(odo_rot), cs.mean,
       j["real_time_factor"].get<double>(), mean_of(ess));
+  fmt::print("{}", maps.text());
 }
 
 }  // namespace implicit::app

@@ -51,6 +51,42 @@ TEST(GridSlamCli, TwoRunsGiveTheirSeedsMeanAndStandardError) {
     EXPECT_TRUE(std::isfinite(j[key].get<double>())) << key;
   EXPECT_GT(j["ess_fraction"].get<double>(), 0.0);
   EXPECT_LE(j["ess_fraction"].get<double>(), 1.0);
+  // The map score (spec §3.13.5): fractions in [0, 1], the mean and standard error of the runs'.
+  EXPECT_EQ(j["map_tolerance_m"].get<double>(), 0.05);  // one cell
+  for (const char* key :
+       {"map_agreement", "map_occupied_precision", "map_occupied_recall", "map_f1"}) {
+    const double ka = j["per_run"][0][key].get<double>(), kb = j["per_run"][1][key].get<double>();
+    for (double v : {ka, kb, j[std::string("odometry_") + key].get<double>()}) {
+      EXPECT_GE(v, 0.0) << key;
+      EXPECT_LE(v, 1.0) << key;
+    }
+    EXPECT_DOUBLE_EQ(j[key]["mean"].get<double>(), 0.5 * (ka + kb)) << key;
+    EXPECT_NEAR(j[key]["se"].get<double>(), 0.5 * std::abs(ka - kb), 1e-12) << key;
+  }
+  EXPECT_GE(j["map_score_cpu_s"].get<double>(), j["reference_map_cpu_s"].get<double>());
+}
+
+TEST(GridSlamCli, OneScanMapsScoreOneInJsonAndText) {
+  // On the first scan alone the filter's, the dead-reckoning and the reference map are the same
+  // map (scan 0 at the first corrected pose): every fraction is exactly 1.
+  const std::string aces = std::string(IMPLICIT_SOURCE_DIR) + "/data/carmen/aces-corrected.log.gz";
+  const auto r = run_cli("slam --sensor laser --quiet --json --max-scans 1 -M 2 --data " + aces);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["scans_processed"], 1);
+  for (const char* key :
+       {"map_agreement", "map_occupied_precision", "map_occupied_recall", "map_f1"}) {
+    EXPECT_EQ(j[key]["mean"].get<double>(), 1.0) << key;
+    EXPECT_EQ(j[std::string("odometry_") + key].get<double>(), 1.0) << key;
+    EXPECT_EQ(j["per_run"][0][key].get<double>(), 1.0) << key;
+  }
+  const auto t = run_cli("slam --sensor laser --quiet --max-scans 1 -M 2 --data " + aces);
+  ASSERT_EQ(t.code, 0) << t.err;
+  EXPECT_NE(t.out.find("map against the reference poses' map: agreement 1.000, occupied precision "
+                       "1.000, recall 1.000, F1 1.000 within 0.050 m (odometry alone: 1.000, "
+                       "1.000, 1.000, 1.000)"),
+            std::string::npos)
+      << t.out;
 }
 
 TEST(GridSlamCli, SameBitsForAnyThreadCountAndEachProposalRuns) {

@@ -9,15 +9,18 @@
 //   slam::GridSlamRun run = slam::run_grid_slam(log, o);
 //   run.relations.translation_mean;             // [m] against the corrected poses
 //   robot::OccupancyGrid map = run.map;         // the best particle's
+//   run.map_score->occupied_f1;                 // against the corrected poses' map (§3.13.5)
 
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string_view>
 #include <vector>
 
 #include "implicit/robot/carmen.hpp"
+#include "implicit/robot/map_comparison.hpp"
 #include "implicit/robot/occupancy_grid.hpp"
 #include "implicit/robot/trajectory_metrics.hpp"
 #include "implicit/slam/grid/grid_slam.hpp"
@@ -48,6 +51,10 @@ struct GridSlamRunOptions {
   ScanMatchProposalOptions scan_match;
   std::uint64_t data_seed = 1;  ///< the odometry's noise: stream (data_seed, scan, 0, data)
   std::size_t max_scans = 0;    ///< 0: every scan of the log; else the first max_scans
+  /// Score the best particle's map, and the dead-reckoning map, against the reference map
+  /// (spec §3.13.5); false skips building the two maps.
+  bool score_map = true;
+  robot::MapComparisonOptions map_comparison;  ///< its tolerance (default one cell)
   /// Called after each processed scan with (scans done, scans to process): progress.
   std::function<void(std::size_t, std::size_t)> on_step;
   void validate() const;
@@ -62,7 +69,15 @@ struct GridSlamRun {
   robot::RelationErrors relations;
   /// The same for the synthesised odometry itself (dead reckoning): what the scans improve on.
   robot::RelationErrors odometry_relations;
-  std::size_t processed = 0;  ///< scans processed (the first included)
+  /// The best particle's map against the reference map: robot::build_map of the processed scans
+  /// at their reference poses, with the filter's mount and mapping options, so that a filter
+  /// with every pose right would score 1 throughout (spec §3.13.5). nullopt when not asked for.
+  std::optional<robot::MapComparison> map_score;
+  /// The map of the processed scans at the synthesised odometry's poses, scored the same way.
+  std::optional<robot::MapComparison> odometry_map_score;
+  double reference_map_cpu_seconds = 0.0;  ///< process CPU time of building the reference map
+  double map_score_cpu_seconds = 0.0;      ///< of both maps and both comparisons
+  std::size_t processed = 0;               ///< scans processed (the first included)
   std::size_t resamplings = 0;
   double mean_ess = 0.0;          ///< N_eff / N before resampling, over the steps
   double mean_evaluations = 0.0;  ///< scan-likelihood evaluations per particle and step
