@@ -90,7 +90,12 @@ def grid(data, method="implicit", particles=30, seed=1, alphas=(0.002,) * 4, max
         odometry's, what the scans improve on); cpu_seconds (the filter's process CPU time),
         resamplings, ess_fraction (mean ESS/M), evaluations_per_particle_and_scan, fallbacks
         (particles that sampled the motion model instead of their proposal), failures (weight
-        zero); scans_processed (= n) and the settings (data, method, particles, seed, alphas).
+        zero); the map score of spec §3.13.5, the map against the one the corrected poses draw
+        from the same scans: map_agreement, map_occupied_precision, map_occupied_recall, map_f1
+        (None for a fraction with nothing to count), the same of the dead-reckoning map as
+        odometry_map_agreement, ..., odometry_map_f1, map_tolerance_m, reference_map_cpu_s and
+        map_score_cpu_s; scans_processed (= n) and the settings (data, method, particles, seed,
+        alphas).
         The numbers are those of `implicit slam --sensor laser --json` for the same settings
         and seed.
 

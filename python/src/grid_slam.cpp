@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,22 @@ py::array_t<std::int8_t> map_cells(const robot::OccupancyGrid& g) {
   return a;
 }
 
+py::object optional_number(const std::optional<double>& v) {
+  return v ? py::object(py::float_(*v)) : py::object(py::none());
+}
+
+/// The map score of spec §3.13.5 under the keys of the tool's JSON (`prefix` "odometry_" for the
+/// dead-reckoning map's); None for a fraction with nothing to count, or when not scored.
+void add_map_score(py::dict& d, const std::optional<robot::MapComparison>& s,
+                   const std::string& prefix) {
+  d[(prefix + "map_agreement").c_str()] = s ? optional_number(s->agreement) : py::none();
+  d[(prefix + "map_occupied_precision").c_str()] =
+      s ? optional_number(s->occupied_precision) : py::none();
+  d[(prefix + "map_occupied_recall").c_str()] =
+      s ? optional_number(s->occupied_recall) : py::none();
+  d[(prefix + "map_f1").c_str()] = s ? optional_number(s->occupied_f1) : py::none();
+}
+
 py::dict result_dict(const slam::GridSlamRun& run, const slam::GridSlamRunOptions& o,
                      const std::string& method, const std::string& source) {
   py::dict d;
@@ -108,6 +125,12 @@ py::dict result_dict(const slam::GridSlamRun& run, const slam::GridSlamRunOption
   d["relation_rotation_deg"] = run.relations.rotation_mean_deg;
   d["odometry_relation_translation_m"] = run.odometry_relations.translation_mean;
   d["odometry_relation_rotation_deg"] = run.odometry_relations.rotation_mean_deg;
+  add_map_score(d, run.map_score, "");
+  add_map_score(d, run.odometry_map_score, "odometry_");
+  d["map_tolerance_m"] =
+      run.map_score ? py::object(py::float_(run.map_score->tolerance_m)) : py::object(py::none());
+  d["reference_map_cpu_s"] = run.reference_map_cpu_seconds;
+  d["map_score_cpu_s"] = run.map_score_cpu_seconds;
   d["cpu_seconds"] = run.cpu_seconds;
   d["resamplings"] = run.resamplings;
   d["ess_fraction"] = run.mean_ess;

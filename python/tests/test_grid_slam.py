@@ -14,6 +14,8 @@ from implicit import laser, slam
 
 # A short run: the first 80 scans of ACES, of which the map-update gate keeps about 50.
 SHORT = dict(particles=5, max_scans=80, seed=3)
+# The map score of spec §3.13.5: the map against the reference poses' map.
+MAP_SCORES = ("map_agreement", "map_occupied_precision", "map_occupied_recall", "map_f1")
 
 
 @pytest.fixture(scope="module")
@@ -32,8 +34,13 @@ def assert_same_numbers(r, c, run=0):
     assert r["relation_translation_m"] == p["relation_translation_m"]
     assert r["relation_rotation_deg"] == p["relation_rotation_deg"]
     assert r["resamplings"] == p["resamplings"]
+    for key in MAP_SCORES:
+        assert r[key] == p[key], key
     if c["datasets"] != 1:
         return
+    for key in MAP_SCORES:  # the mean over one run, and the dead-reckoning map's
+        assert r[key] == c[key]["mean"] and r["odometry_" + key] == c["odometry_" + key], key
+    assert r["map_tolerance_m"] == c["map_tolerance_m"]
     assert r["relation_translation_m"] == c["relation_translation_m"]["mean"]
     assert r["relation_rotation_deg"] == c["relation_rotation_deg"]["mean"]
     assert r["odometry_relation_translation_m"] == c["odometry_relation_translation_m"]
@@ -127,6 +134,10 @@ def test_grid_equals_the_cli_json_and_files(cli, aces, tmp_path):
     # The scans drew walls (occupied: >= 65), and the estimate beat the odometry it was given.
     assert (m >= 65).sum() > 100
     assert r["relation_translation_m"] < r["odometry_relation_translation_m"]
+    # ... and its map is closer to the reference poses' map than the dead-reckoning map.
+    assert all(0 <= r[key] <= 1 for key in MAP_SCORES)
+    assert r["map_f1"] > r["odometry_map_f1"]
+    assert r["map_tolerance_m"] == r["resolution"]  # one cell, the default
 
 
 @pytest.mark.parametrize("method", ["bootstrap", "gmapping"])
@@ -160,7 +171,7 @@ def test_same_seed_same_run_and_the_log_dict_is_the_file(aces):
     c = slam.grid(pathlib.Path(aces), **SHORT)  # os.PathLike
     for other in (b, c):
         assert set(other) == set(a)
-        for key in set(a) - {"cpu_seconds", "grid"}:
+        for key in set(a) - {"cpu_seconds", "reference_map_cpu_s", "map_score_cpu_s", "grid"}:
             np.testing.assert_array_equal(np.asarray(other[key]), np.asarray(a[key]), key)
     d = slam.grid(aces, **{**SHORT, "seed": 4})
     assert d["trajectory"].shape == a["trajectory"].shape  # the same scans pass the gate
