@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -108,6 +109,36 @@ TEST(ParticleEngine, ResampleKeepsThePopulationBeforeItUntilTheNextMove) {
   e.move([](std::size_t, double&) { return 0.0; });
   EXPECT_FALSE(e.resampled());
   EXPECT_THROW(e.resample(std::vector<std::size_t>{0, 4}), InvalidArgument);
+}
+
+// Particles that share state (grid SLAM's maps share tiles): the kept population holds
+// references until it is released, after which a particle not drawn is freed and a drawn one is
+// held by its descendants alone.
+TEST(ParticleEngine, ReleasingThePopulationBeforeResamplingDropsItsReferences) {
+  ParticleEngine<std::shared_ptr<int>> e(3, nullptr);
+  e.move([](std::size_t j, std::shared_ptr<int>& p) {
+    p = std::make_shared<int>(static_cast<int>(j));
+    return 0.0;
+  });
+  e.reweight();
+  const std::weak_ptr<int> not_drawn = e.particles()[1];
+  const std::weak_ptr<int> drawn_once = e.particles()[2];
+  e.resample(std::vector<std::size_t>{0, 0, 2});
+  EXPECT_EQ(e.particles()[0].use_count(), 3);  // two descendants and the kept population
+  EXPECT_EQ(drawn_once.use_count(), 2);
+  EXPECT_FALSE(not_drawn.expired());
+  e.release_before_resampling();
+  EXPECT_TRUE(e.before_resampling().empty());
+  EXPECT_TRUE(e.weights_before_resampling().empty());
+  EXPECT_EQ(e.particles()[0].use_count(), 2);
+  EXPECT_EQ(drawn_once.use_count(), 1);  // a write to it need not copy
+  EXPECT_TRUE(not_drawn.expired());
+  EXPECT_EQ(*e.particles()[2], 2);
+  // The engine goes on as before: the next resampling keeps its population again.
+  e.reweight();
+  e.resample(std::vector<std::size_t>{2, 1, 0});
+  ASSERT_EQ(e.before_resampling().size(), 3u);
+  EXPECT_EQ(*e.particles()[0], 2);
 }
 
 TEST(ParticleEngine, AssignNormalisesLogWeightsAndRefusesAZeroTotal) {

@@ -160,6 +160,16 @@ class ParticleEngine {
     resampled_ = true;
   }
 
+  /// Frees the population and weights that resample() kept (before_resampling() is empty
+  /// afterwards). For particles that share state copy on write, as grid SLAM's maps share tiles,
+  /// the kept population holds a reference to every old tile: each write after resampling would
+  /// copy its tile, even in a particle that is its ancestor's only descendant, and the old maps
+  /// would stay in memory until the next resampling.
+  void release_before_resampling() {
+    previous_.clear();
+    previous_weights_.clear();
+  }
+
   /// Whether resample() ran since the last move().
   bool resampled() const { return resampled_; }
   /// The population and weights before the last resampling (valid while resampled()): estimates

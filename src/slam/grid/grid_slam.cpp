@@ -116,6 +116,9 @@ GridSlamStep GridSlam::step(const robot::Pose& odometry, const robot::LaserScan&
     resample(ResamplingScheme::kSystematic, w, uniforms_, m, ancestors_);
     const std::size_t best_before = best_;
     engine_.resample(ancestors_);
+    // Nothing reads the old population, and its references would make every map write below
+    // copy its tile.
+    engine_.release_before_resampling();
     best_ = static_cast<std::size_t>(std::find(ancestors_.begin(), ancestors_.end(), best_before) -
                                      ancestors_.begin());
     if (best_ == m) best_ = 0;  // systematic resampling keeps the largest weight's particle
