@@ -15,10 +15,10 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "experiments/grid_slam.hpp"
 #include "implicit/robot/carmen.hpp"
 #include "implicit/robot/map_io.hpp"
 #include "implicit/slam/grid/grid_slam_run.hpp"
-#include "run_statistics.hpp"
 #include "tum_output.hpp"
 
 namespace implicit::app {
@@ -44,75 +44,35 @@ void add_grid_slam_options(CLI::App& sub, GridSlamCommand& g) {
 
 namespace {
 
-struct GridSlamSummaryStat {
-  double mean = 0, se = 0;
-};
-
-GridSlamSummaryStat grid_slam_stat(const std::vector<double>& v) {
-  GridSlamSummaryStat s;
-  if (v.empty()) return s;
-  s.mean = mean_of(v);
-  s.se = v.size() > 1 ? sd_of(v) / std::sqrt(static_cast<double>(v.size())) : 0.0;
-  return s;
+/// "0.123" or "n/a" (nothing counted).
+std::string fraction_text(const std::optional<double>& v) {
+  return v ? fmt::format("{:.3f}", *v) : std::string("n/a");
+}
+std::string fraction_text(const std::optional<experiments::GridSlamStat>& v) {
+  return v ? fmt::format("{:.3f}", v->mean) : std::string("n/a");
 }
 
-// The map scores of the runs (spec §3.13.5): each fraction may be absent from a run (nothing to
-// count), so the statistics are over the runs that have it, and null in JSON when none has.
-struct GridSlamMapScores {
-  static constexpr const char* kKeys[] = {"map_agreement", "map_occupied_precision",
-                                          "map_occupied_recall", "map_f1"};
-  std::vector<double> filter[4], odometry[4];
-  std::vector<double> reference_cpu, score_cpu;
-  double tolerance_m = 0.0;
-
-  static std::optional<double> field(const robot::MapComparison& s, int k) {
-    const std::optional<double> f[4] = {s.agreement, s.occupied_precision, s.occupied_recall,
-                                        s.occupied_f1};
-    return f[k];
-  }
-  static nlohmann::json value(const std::optional<double>& v) {
-    return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
-  }
-  static nlohmann::json mean_or_null(const std::vector<double>& v) {
-    return v.empty() ? nlohmann::json(nullptr) : nlohmann::json(mean_of(v));
-  }
-  // Adds the run's scores to the statistics and to its per_run entry.
-  void add(const slam::GridSlamRun& run, nlohmann::json& per_run) {
-    if (!run.map_score || !run.odometry_map_score) return;
-    tolerance_m = run.map_score->tolerance_m;
-    for (int k = 0; k < 4; ++k) {
-      const std::optional<double> f = field(*run.map_score, k),
-                                  o = field(*run.odometry_map_score, k);
-      if (f) filter[k].push_back(*f);
-      if (o) odometry[k].push_back(*o);
-      per_run[kKeys[k]] = value(f);
-    }
-    reference_cpu.push_back(run.reference_map_cpu_seconds);
-    score_cpu.push_back(run.map_score_cpu_seconds);
-  }
-  void to_json(nlohmann::json& j) const {
-    j["map_tolerance_m"] = tolerance_m;
-    for (int k = 0; k < 4; ++k) {
-      const auto& v = filter[k];
-      const double se = v.size() > 1 ? sd_of(v) / std::sqrt(static_cast<double>(v.size())) : 0.0;
-      j[kKeys[k]] = {{"mean", mean_or_null(v)},
-                     {"se", v.empty() ? nlohmann::json(nullptr) : nlohmann::json(se)}};
-      j[std::string("odometry_") + kKeys[k]] = mean_or_null(odometry[k]);
-    }
-    j["reference_map_cpu_s"] = mean_or_null(reference_cpu);
-    j["map_score_cpu_s"] = mean_or_null(score_cpu);
-  }
-  std::string text() const {
-    const auto f = [](const std::vector<double>& v) {
-      return v.empty() ? std::string("n/a") : fmt::format("{:.3f}", mean_of(v));
-    };
-    return fmt::format(
-        "  map against the reference poses' map: agreement {}, occupied precision {}, recall {}, "
-        "F1 {} within {:.3f} m (odometry alone: {}, {}, {}, {})\n",
-        f(filter[0]), f(filter[1]), f(filter[2]), f(filter[3]), tolerance_m, f(odometry[0]),
-        f(odometry[1]), f(odometry[2]), f(odometry[3]));
-  }
-};
+void print_grid_slam_text(const experiments::GridSlamResult& r, const std::string& data) {
+  const auto& o = r.settings.run;
+  fmt::print(
+      "grid SLAM on {}: {} proposal, M = {}, {} run{}, {} scans processed\n"
+      "  relation error {:.4f} ± {:.4f} m, {:.3f} deg (odometry alone {:.4f} m, {:.3f} deg)\n"
+      "  trajectory error after SE(2) alignment {} m (odometry alone {} m)\n"
+      "  {:.2f} ms CPU per scan, {:.0f}x real time, ESS/M {:.2f}\n",
+      data, slam::to_string(o.proposal), o.filter.particles, r.settings.runs,
+      r.settings.runs == 1 ? "" : "s", r.scans_processed, r.relation_translation_m.mean,
+      r.relation_translation_m.se, r.relation_rotation_deg.mean, r.odometry_translation_m,
+      r.odometry_rotation_deg, fraction_text(r.ate_m), fraction_text(r.odometry_ate_m),
+      r.cpu_ms_per_scan.mean, r.real_time_factor, r.ess_fraction);
+  if (!o.score_map) return;
+  const auto& m = r.odometry_map;
+  fmt::print(
+      "  map against the reference poses' map: agreement {}, occupied precision {}, recall {}, "
+      "F1 {} within {:.3f} m (odometry alone: {}, {}, {}, {})\n",
+      fraction_text(r.map_agreement), fraction_text(r.map_precision), fraction_text(r.map_recall),
+      fraction_text(r.map_f1), r.map_tolerance_m, fraction_text(m.agreement),
+      fraction_text(m.precision), fraction_text(m.recall), fraction_text(m.f1));
+}
 
 void write_grid_slam_tum(const std::string& file, std::string_view flag,
                          const std::vector<slam::GridSlamPose>& poses) {
@@ -155,101 +115,45 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
                                                        "gmapping or implicit (the grid-SLAM "
                                                        "proposals), got '{}'",
                                                        shared.method));
-  slam::GridSlamRunOptions o;
+  experiments::GridSlamSettings settings;
+  slam::GridSlamRunOptions& o = settings.run;
+  settings.data = shared.data_dir;
   o.proposal = slam::parse_grid_proposal(shared.method);
   // GMapping's default particle count when -M is not given; one run unless --datasets says.
   o.filter.particles =
       g.particles->count() > 0 ? static_cast<std::size_t>(shared.particles) : std::size_t{30};
-  const int runs = g.datasets->count() > 0 ? shared.datasets : 1;
+  settings.runs = g.datasets->count() > 0 ? shared.datasets : 1;
+  settings.seed = ctx.seed;
+  settings.keep_first = true;  // its trajectory and map for the files below
   if (!g.alphas.empty()) o.filter.alphas = {g.alphas[0], g.alphas[1], g.alphas[2], g.alphas[3]};
   o.max_scans = static_cast<std::size_t>(g.max_scans);
-  o.validate();
+  settings.validate();
   const robot::CarmenLog log = robot::read_carmen(shared.data_dir);
+  // Progress in thousandths of each run (the scans a run processes are known once it starts).
   Progress bar(fmt::format("grid SLAM {} M={}", shared.method, o.filter.particles),
-               static_cast<std::size_t>(runs) * 1000, ctx.show_progress());
-  std::vector<double> trans, rot, odo_trans, odo_rot, cpu_scan, ess, evals, resamplings;
-  std::size_t fallbacks = 0, failures = 0, processed = 0;
-  nlohmann::json per_run = nlohmann::json::array();
-  GridSlamMapScores maps;
-  double log_seconds = 0.0;
-  for (int r = 0; r < runs; ++r) {
-    slam::GridSlamRunOptions ro = o;
-    ro.filter.seed = ctx.seed + static_cast<std::uint64_t>(r);
-    ro.data_seed = ctx.seed + static_cast<std::uint64_t>(r);
-    std::size_t ticked = 0;
-    ro.on_step = [&](std::size_t done, std::size_t total) {
-      const std::size_t now = done * 1000 / std::max<std::size_t>(total, 1);
-      if (now > ticked) bar.tick(now - ticked);
-      ticked = now;
-    };
-    const slam::GridSlamRun run = slam::run_grid_slam(log, ro);
-    if (ticked < 1000) bar.tick(1000 - ticked);
-    processed = run.processed;
-    if (run.reference.size() > 1)
-      log_seconds = std::abs(run.reference.back().time - run.reference.front().time);
-    trans.push_back(run.relations.translation_mean);
-    rot.push_back(run.relations.rotation_mean_deg);
-    odo_trans.push_back(run.odometry_relations.translation_mean);
-    odo_rot.push_back(run.odometry_relations.rotation_mean_deg);
-    cpu_scan.push_back(1e3 * run.cpu_seconds /
-                       static_cast<double>(std::max<std::size_t>(run.processed, 1)));
-    ess.push_back(run.mean_ess);
-    evals.push_back(run.mean_evaluations);
-    resamplings.push_back(static_cast<double>(run.resamplings));
-    fallbacks += run.fallbacks;
-    failures += run.failures;
-    per_run.push_back({{"seed", ro.filter.seed},
-                       {"relation_translation_m", run.relations.translation_mean},
-                       {"relation_rotation_deg", run.relations.rotation_mean_deg},
-                       {"cpu_ms_per_scan", cpu_scan.back()},
-                       {"resamplings", run.resamplings}});
-    maps.add(run, per_run.back());
-    if (r != 0) continue;
-    if (!shared.trajectory.empty())
-      write_grid_slam_tum(shared.trajectory, "slam --trajectory", run.trajectory);
-    if (!shared.truth_trajectory.empty())
-      write_grid_slam_tum(shared.truth_trajectory, "slam --truth-trajectory", run.reference);
-    if (!g.map_out.empty()) robot::save_map(run.map, g.map_out);
-  }
+               static_cast<std::size_t>(settings.runs) * 1000, ctx.show_progress());
+  std::size_t ticked = 0;
+  const experiments::GridSlamResult r = experiments::run_grid_slam_experiment(
+      settings, log, [&](int run, std::size_t done, std::size_t total) {
+        const std::size_t now =
+            static_cast<std::size_t>(run) * 1000 + done * 1000 / std::max<std::size_t>(total, 1);
+        if (now > ticked) bar.tick(now - ticked);
+        ticked = std::max(ticked, now);
+      });
   bar.finish();
-  const auto t = grid_slam_stat(trans), rt = grid_slam_stat(rot), cs = grid_slam_stat(cpu_scan);
-  nlohmann::json j;
-  j["experiment"] = "grid_slam";
-  j["data"] = shared.data_dir;
-  j["method"] = shared.method;
-  j["particles"] = o.filter.particles;
-  j["datasets"] = runs;
-  j["alphas"] = {o.filter.alphas.alpha1, o.filter.alphas.alpha2, o.filter.alphas.alpha3,
-                 o.filter.alphas.alpha4};
-  j["seed"] = ctx.seed;
-  j["scans_processed"] = processed;
-  j["relation_translation_m"] = {{"mean", t.mean}, {"se", t.se}};
-  j["relation_rotation_deg"] = {{"mean", rt.mean}, {"se", rt.se}};
-  j["odometry_relation_translation_m"] = mean_of(odo_trans);
-  j["odometry_relation_rotation_deg"] = mean_of(odo_rot);
-  j["cpu_ms_per_scan"] = {{"mean", cs.mean}, {"se", cs.se}};
-  j["real_time_factor"] = cs.mean > 0 && processed > 0
-                              ? log_seconds / (cs.mean * 1e-3 * static_cast<double>(processed))
-                              : 0.0;
-  j["ess_fraction"] = mean_of(ess);
-  j["evaluations_per_particle_and_scan"] = mean_of(evals);
-  j["resamplings_mean"] = mean_of(resamplings);
-  j["fallbacks"] = fallbacks;
-  j["failures"] = failures;
-  maps.to_json(j);
-  j["per_run"] = per_run;
+  const slam::GridSlamRun& first = *r.first;
+  if (!shared.trajectory.empty())
+    write_grid_slam_tum(shared.trajectory, "slam --trajectory", first.trajectory);
+  if (!shared.truth_trajectory.empty())
+    write_grid_slam_tum(shared.truth_trajectory, "slam --truth-trajectory", first.reference);
+  if (!g.map_out.empty()) robot::save_map(first.map, g.map_out);
+  nlohmann::json j = experiments::to_json(r);
+  j["data"] = shared.data_dir;  // as given on the command line
   if (ctx.json) {
     print_json(j);
     return;
   }
-  fmt::print(
-      "grid SLAM on {}: {} proposal, M = {}, {} run{}, {} scans processed\n"
-      "  relation error {:.4f} ± {:.4f} m, {:.3f} deg (odometry alone {:.4f} m, {:.3f} deg)\n"
-      "  {:.2f} ms CPU per scan, {:.0f}x real time, ESS/M {:.2f}\n",
-      shared.data_dir, shared.method, o.filter.particles, runs, runs == 1 ? "" : "s", processed,
-      t.mean, t.se, rt.mean, mean_of(odo_trans), mean_of(odo_rot), cs.mean,
-      j["real_time_factor"].get<double>(), mean_of(ess));
-  fmt::print("{}", maps.text());
+  print_grid_slam_text(r, shared.data_dir);
 }
 
 }  // namespace implicit::app

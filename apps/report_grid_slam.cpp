@@ -33,8 +33,9 @@ Table grid_slam_table(const json& results, const Text& text) {
   Table t;
   t.header = {text("grid.col.data"),     text("grid.col.proposal"), text("col.m"),
               text("col.runs"),          text("grid.col.scans"),    text("grid.col.translation"),
-              text("grid.col.rotation"), text("grid.col.odometry"), text("grid.col.ess"),
-              text("grid.col.cpu_scan"), text("grid.col.real_time")};
+              text("grid.col.rotation"), text("grid.col.odometry"), text("grid.col.ate"),
+              text("grid.col.map_f1"),   text("grid.col.ess"),      text("grid.col.cpu_scan"),
+              text("grid.col.real_time")};
   for (const auto& run : experiment_runs(results, kGridSlamExperiment)) {
     const auto& s = get(run, "settings");
     std::vector<std::string> row = {s.value("data", std::string("?")),
@@ -55,7 +56,9 @@ Table grid_slam_table(const json& results, const Text& text) {
         row.end(),
         {std::to_string(r.value("datasets", 0)), grid_number(get(r, "scans_processed"), 0),
          grid_mean_se(r, "relation_translation_m", 4), grid_mean_se(r, "relation_rotation_deg", 2),
-         odometry, grid_number(get(r, "ess_fraction"), 2), grid_mean_se(r, "cpu_ms_per_scan", 1),
+         odometry, grid_mean_se(r, "ate_m", 3),
+         grid_mean_se(r, "map_f1", 3) + " (" + grid_number(get(r, "odometry_map_f1"), 3) + ")",
+         grid_number(get(r, "ess_fraction"), 2), grid_mean_se(r, "cpu_ms_per_scan", 1),
          grid_number(get(r, "real_time_factor"), 0)});
     t.rows.push_back(row);
   }

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numeric>
+#include <optional>
 
 #include "implicit/core/error.hpp"
 
@@ -11,18 +13,47 @@ namespace implicit::experiments {
 
 namespace {
 
-GridSlamStat stat_of(const std::vector<GridSlamRunRecord>& runs, double GridSlamRunRecord::*field) {
+GridSlamStat stat_of(const std::vector<double>& v) {
   GridSlamStat s;
-  const double n = static_cast<double>(runs.size());
-  if (runs.empty()) return s;
-  for (const auto& r : runs) s.mean += r.*field;
+  const double n = static_cast<double>(v.size());
+  if (v.empty()) return s;
+  for (double x : v) s.mean += x;
   s.mean /= n;
-  if (runs.size() > 1) {
+  if (v.size() > 1) {
     double ss = 0.0;
-    for (const auto& r : runs) ss += (r.*field - s.mean) * (r.*field - s.mean);
+    for (double x : v) ss += (x - s.mean) * (x - s.mean);
     s.se = std::sqrt(ss / (n - 1.0)) / std::sqrt(n);
   }
   return s;
+}
+
+GridSlamStat stat_of(const std::vector<GridSlamRunRecord>& runs, double GridSlamRunRecord::*field) {
+  std::vector<double> v;
+  for (const auto& r : runs) v.push_back(r.*field);
+  return stat_of(v);
+}
+
+/// Over the runs that have the value; nullopt when none has.
+std::optional<GridSlamStat> stat_of_present(
+    const std::vector<GridSlamRunRecord>& runs,
+    const std::function<std::optional<double>(const GridSlamRunRecord&)>& field) {
+  std::vector<double> v;
+  for (const auto& r : runs)
+    if (const auto x = field(r)) v.push_back(*x);
+  if (v.empty()) return std::nullopt;
+  return stat_of(v);
+}
+
+std::optional<double> mean_of_present(
+    const std::vector<GridSlamRunRecord>& runs,
+    const std::function<std::optional<double>(const GridSlamRunRecord&)>& field) {
+  const auto s = stat_of_present(runs, field);
+  return s ? std::optional<double>(s->mean) : std::nullopt;
+}
+
+MapFractions fractions_of(const std::optional<robot::MapComparison>& c) {
+  if (!c) return {};
+  return {c->agreement, c->occupied_precision, c->occupied_recall, c->occupied_f1};
 }
 
 GridSlamRunRecord record_of(const slam::GridSlamRun& run, std::uint64_t seed) {
@@ -39,7 +70,30 @@ GridSlamRunRecord record_of(const slam::GridSlamRun& run, std::uint64_t seed) {
   r.resamplings = run.resamplings;
   r.fallbacks = run.fallbacks;
   r.failures = run.failures;
+  r.ate_m = run.ate_m;
+  r.odometry_ate_m = run.odometry_ate_m;
+  r.map = fractions_of(run.map_score);
+  r.odometry_map = fractions_of(run.odometry_map_score);
+  r.reference_map_cpu_s = run.reference_map_cpu_seconds;
+  r.map_score_cpu_s = run.map_score_cpu_seconds;
   return r;
+}
+
+/// The map scores over the runs.
+void summarise_maps(GridSlamResult& result) {
+  const auto& runs = result.runs;
+  using R = GridSlamRunRecord;
+  result.map_agreement = stat_of_present(runs, [](const R& r) { return r.map.agreement; });
+  result.map_precision = stat_of_present(runs, [](const R& r) { return r.map.precision; });
+  result.map_recall = stat_of_present(runs, [](const R& r) { return r.map.recall; });
+  result.map_f1 = stat_of_present(runs, [](const R& r) { return r.map.f1; });
+  auto& o = result.odometry_map;
+  o.agreement = mean_of_present(runs, [](const R& r) { return r.odometry_map.agreement; });
+  o.precision = mean_of_present(runs, [](const R& r) { return r.odometry_map.precision; });
+  o.recall = mean_of_present(runs, [](const R& r) { return r.odometry_map.recall; });
+  o.f1 = mean_of_present(runs, [](const R& r) { return r.odometry_map.f1; });
+  result.reference_map_cpu_s = stat_of(runs, &R::reference_map_cpu_s).mean;
+  result.map_score_cpu_s = stat_of(runs, &R::map_score_cpu_s).mean;
 }
 
 /// The summaries over the runs (records already in place).
@@ -61,6 +115,10 @@ void summarise(GridSlamResult& result) {
   const double cpu_seconds =
       result.cpu_ms_per_scan.mean * 1e-3 * static_cast<double>(result.scans_processed);
   result.real_time_factor = cpu_seconds > 0.0 ? result.log_seconds / cpu_seconds : 0.0;
+  result.ate_m = stat_of_present(runs, [](const GridSlamRunRecord& r) { return r.ate_m; });
+  result.odometry_ate_m =
+      mean_of_present(runs, [](const GridSlamRunRecord& r) { return r.odometry_ate_m; });
+  summarise_maps(result);
 }
 
 }  // namespace
@@ -89,6 +147,7 @@ GridSlamResult run_grid_slam_experiment(const GridSlamSettings& settings,
     if (run.reference.size() > 1)
       result.log_seconds = std::abs(run.reference.back().time - run.reference.front().time);
     result.runs.push_back(record_of(run, seed));
+    if (run.map_score) result.map_tolerance_m = run.map_score->tolerance_m;
     if (k == 0 && settings.keep_first) result.first = std::move(run);
   }
   summarise(result);
@@ -96,11 +155,15 @@ GridSlamResult run_grid_slam_experiment(const GridSlamSettings& settings,
 }
 
 nlohmann::json to_json(const GridSlamResult& r) {
+  using nlohmann::json;
   const slam::GridSlamRunOptions& o = r.settings.run;
-  const auto stat = [](const GridSlamStat& s) {
-    return nlohmann::json{{"mean", s.mean}, {"se", s.se}};
+  const auto stat = [](const GridSlamStat& s) { return json{{"mean", s.mean}, {"se", s.se}}; };
+  // A value nothing was counted for is null, never a number that reads as a result.
+  const auto maybe = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  const auto maybe_stat = [&](const std::optional<GridSlamStat>& s) {
+    return s ? stat(*s) : json{{"mean", nullptr}, {"se", nullptr}};
   };
-  nlohmann::json j;
+  json j;
   j["experiment"] = "grid_slam";
   j["data"] = r.settings.data.string();
   j["method"] = std::string(slam::to_string(o.proposal));
@@ -114,6 +177,8 @@ nlohmann::json to_json(const GridSlamResult& r) {
   j["relation_rotation_deg"] = stat(r.relation_rotation_deg);
   j["odometry_relation_translation_m"] = r.odometry_translation_m;
   j["odometry_relation_rotation_deg"] = r.odometry_rotation_deg;
+  j["ate_m"] = maybe_stat(r.ate_m);
+  j["odometry_ate_m"] = maybe(r.odometry_ate_m);
   j["cpu_ms_per_scan"] = stat(r.cpu_ms_per_scan);
   j["real_time_factor"] = r.real_time_factor;
   j["ess_fraction"] = r.ess_fraction;
@@ -121,13 +186,29 @@ nlohmann::json to_json(const GridSlamResult& r) {
   j["resamplings_mean"] = r.resamplings;
   j["fallbacks"] = r.fallbacks;
   j["failures"] = r.failures;
-  nlohmann::json per_run = nlohmann::json::array();
+  j["map_tolerance_m"] = r.map_tolerance_m;
+  j["map_agreement"] = maybe_stat(r.map_agreement);
+  j["map_occupied_precision"] = maybe_stat(r.map_precision);
+  j["map_occupied_recall"] = maybe_stat(r.map_recall);
+  j["map_f1"] = maybe_stat(r.map_f1);
+  j["odometry_map_agreement"] = maybe(r.odometry_map.agreement);
+  j["odometry_map_occupied_precision"] = maybe(r.odometry_map.precision);
+  j["odometry_map_occupied_recall"] = maybe(r.odometry_map.recall);
+  j["odometry_map_f1"] = maybe(r.odometry_map.f1);
+  j["reference_map_cpu_s"] = r.reference_map_cpu_s;
+  j["map_score_cpu_s"] = r.map_score_cpu_s;
+  json per_run = json::array();
   for (const auto& run : r.runs)
     per_run.push_back({{"seed", run.seed},
                        {"relation_translation_m", run.relation_translation_m},
                        {"relation_rotation_deg", run.relation_rotation_deg},
+                       {"ate_m", maybe(run.ate_m)},
                        {"cpu_ms_per_scan", run.cpu_ms_per_scan},
-                       {"resamplings", run.resamplings}});
+                       {"resamplings", run.resamplings},
+                       {"map_agreement", maybe(run.map.agreement)},
+                       {"map_occupied_precision", maybe(run.map.precision)},
+                       {"map_occupied_recall", maybe(run.map.recall)},
+                       {"map_f1", maybe(run.map.f1)}});
   j["per_run"] = per_run;
   return j;
 }

@@ -36,6 +36,11 @@ struct GridSlamSettings {
   void validate() const;
 };
 
+/// Agreement, occupied precision, recall and F1 of a map score (robot::MapComparison).
+struct MapFractions {
+  std::optional<double> agreement, precision, recall, f1;
+};
+
 /// One run's numbers (the trajectory and map only for the first run, in GridSlamResult::first).
 struct GridSlamRunRecord {
   std::uint64_t seed = 0;
@@ -45,6 +50,11 @@ struct GridSlamRunRecord {
   double ess_fraction = 0.0;  ///< mean N_eff / N before resampling
   double evaluations = 0.0;   ///< scan-likelihood evaluations per particle and scan
   std::size_t resamplings = 0, fallbacks = 0, failures = 0;
+  /// The absolute trajectory errors after SE(2) alignment (GridSlamRun::ate_m).
+  std::optional<double> ate_m, odometry_ate_m;
+  /// The map scores (spec §3.13.5), each absent when the run had nothing to count (or no score).
+  MapFractions map, odometry_map;
+  double reference_map_cpu_s = 0.0, map_score_cpu_s = 0.0;
 };
 
 /// Mean and standard error (sample sd / sqrt(runs); 0 for one run) over the runs.
@@ -64,6 +74,14 @@ struct GridSlamResult {
   std::size_t fallbacks = 0, failures = 0;                           ///< sums over the runs
   /// The log's span over the mean CPU time of a run: how much faster than real time.
   double real_time_factor = 0.0;
+  /// Over the runs that have each value (std::nullopt when none has): the ATE and the map
+  /// fractions of the filter with their standard errors, and the odometry's means.
+  std::optional<GridSlamStat> ate_m;
+  std::optional<double> odometry_ate_m;
+  std::optional<GridSlamStat> map_agreement, map_precision, map_recall, map_f1;
+  MapFractions odometry_map;
+  double map_tolerance_m = 0.0;
+  double reference_map_cpu_s = 0.0, map_score_cpu_s = 0.0;  ///< means over the runs
   std::optional<slam::GridSlamRun> first;  ///< the first run, when settings.keep_first
 };
 

@@ -87,7 +87,9 @@ def grid(data, method="implicit", particles=30, seed=1, alphas=(0.002,) * 4, max
         implicit.laser.OccupancyGrid (save_map(r["grid"], "map.yaml") writes the files of
         --map-out; None if no beam hit anything); relation_translation_m, relation_rotation_deg
         and odometry_relation_translation_m, odometry_relation_rotation_deg (the synthesised
-        odometry's, what the scans improve on); cpu_seconds (the filter's process CPU time),
+        odometry's, what the scans improve on); ate_m and odometry_ate_m (the position RMSE
+        against the reference after the best SE(2) alignment; None with fewer than two
+        scans processed); cpu_seconds (the filter's process CPU time),
         resamplings, ess_fraction (mean ESS/M), evaluations_per_particle_and_scan, fallbacks
         (particles that sampled the motion model instead of their proposal), failures (weight
         zero); the map score of spec §3.13.5, the map against the one the corrected poses draw

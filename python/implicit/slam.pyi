@@ -39,7 +39,8 @@ def grid(data: Union[str, "PathLike[str]", dict[str, Any]], method: str = "impli
     """Grid SLAM on a CARMEN laser log, one run of `implicit slam --sensor laser`: trajectory
     and reference (n, 3), times (n,), map int8 (height, width) (-1 unknown, 0..100; row 0 the
     lowest y), resolution, origin, grid (an implicit.laser.OccupancyGrid or None), the relation
-    errors of the estimate and of the odometry, cpu_seconds, resamplings, ess_fraction,
+    errors of the estimate and of the odometry, ate_m and odometry_ate_m (float or None),
+    cpu_seconds, resamplings, ess_fraction,
     evaluations_per_particle_and_scan, fallbacks, failures, the map score (map_agreement,
     map_occupied_precision, map_occupied_recall, map_f1, their odometry_ twins, each a float or
     None; map_tolerance_m, reference_map_cpu_s, map_score_cpu_s), scans_processed and the

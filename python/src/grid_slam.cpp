@@ -125,6 +125,8 @@ py::dict result_dict(const slam::GridSlamRun& run, const slam::GridSlamRunOption
   d["relation_rotation_deg"] = run.relations.rotation_mean_deg;
   d["odometry_relation_translation_m"] = run.odometry_relations.translation_mean;
   d["odometry_relation_rotation_deg"] = run.odometry_relations.rotation_mean_deg;
+  d["ate_m"] = optional_number(run.ate_m);
+  d["odometry_ate_m"] = optional_number(run.odometry_ate_m);
   add_map_score(d, run.map_score, "");
   add_map_score(d, run.odometry_map_score, "odometry_");
   d["map_tolerance_m"] =

@@ -45,6 +45,7 @@ def assert_same_numbers(r, c, run=0):
     assert r["relation_rotation_deg"] == c["relation_rotation_deg"]["mean"]
     assert r["odometry_relation_translation_m"] == c["odometry_relation_translation_m"]
     assert r["odometry_relation_rotation_deg"] == c["odometry_relation_rotation_deg"]
+    assert r["ate_m"] == c["ate_m"]["mean"] and r["odometry_ate_m"] == c["odometry_ate_m"]
     assert r["ess_fraction"] == c["ess_fraction"]
     assert r["evaluations_per_particle_and_scan"] == c["evaluations_per_particle_and_scan"]
     assert r["resamplings"] == c["resamplings_mean"]

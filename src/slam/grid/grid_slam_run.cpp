@@ -1,6 +1,9 @@
 #include "implicit/slam/grid/grid_slam_run.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <ctime>
+#include <optional>
 #include <string>
 
 #include "implicit/core/error.hpp"
@@ -82,6 +85,31 @@ void score_maps(const robot::CarmenLog& log, const std::vector<std::size_t>& use
   run.map_score_cpu_seconds = cpu_seconds_since(start);
 }
 
+/// The RMSE of `est`'s positions against `ref`'s after the SE(2) alignment of est onto ref
+/// (pairs by index); nullopt when fewer than two poses or every estimated position is the same,
+/// where no rotation is fixed.
+std::optional<double> aligned_rmse(const std::vector<robot::Pose>& est,
+                                   const std::vector<GridSlamPose>& ref) {
+  if (est.size() < 2 || est.size() != ref.size()) return std::nullopt;
+  const bool moved = std::any_of(est.begin(), est.end(), [&](const robot::Pose& p) {
+    return p.head<2>() != est.front().head<2>();
+  });
+  if (!moved) return std::nullopt;
+  robot::PosePairs pairs;
+  for (std::size_t i = 0; i < est.size(); ++i) {
+    pairs.times.push_back(static_cast<double>(i));
+    pairs.ref.push_back(robot::Pose3::from_se2(ref[i].pose));
+    pairs.est.push_back(robot::Pose3::from_se2(est[i]));
+    pairs.ref_index.push_back(i);
+    pairs.est_index.push_back(i);
+  }
+  const robot::TrajectoryErrors e =
+      robot::absolute_pose_error(pairs, robot::align_umeyama(pairs, robot::AlignmentKind::kSe2));
+  double ss = 0.0;
+  for (double t : e.translation) ss += t * t;
+  return std::sqrt(ss / static_cast<double>(e.translation.size()));
+}
+
 }  // namespace
 
 GridSlamRun run_grid_slam(const robot::CarmenLog& log, const GridSlamRunOptions& options) {
@@ -150,6 +178,8 @@ GridSlamRun run_grid_slam(const robot::CarmenLog& log, const GridSlamRunOptions&
     run.odometry_relations = robot::relation_errors(robot::Trajectory::from_se2(times, odometry),
                                                     relations, {.max_diff = 0.1});
   }
+  run.ate_m = aligned_rmse(poses, run.reference);
+  run.odometry_ate_m = aligned_rmse(odometry, run.reference);
   if (options.score_map) score_maps(log, used, odometry, options, run);
   return run;
 }

@@ -69,6 +69,12 @@ struct GridSlamRun {
   robot::RelationErrors relations;
   /// The same for the synthesised odometry itself (dead reckoning): what the scans improve on.
   robot::RelationErrors odometry_relations;
+  /// Absolute trajectory error [m]: the RMSE of the best trajectory's positions against the
+  /// reference's at the processed scans after the least-squares SE(2) alignment of the
+  /// estimate onto the reference (Umeyama; spec §3.13.4). nullopt when the positions cannot fix
+  /// the alignment (fewer than two scans processed, or no motion).
+  std::optional<double> ate_m;
+  std::optional<double> odometry_ate_m;  ///< the same for the synthesised odometry
   /// The best particle's map against the reference map: robot::build_map of the processed scans
   /// at their reference poses, with the filter's mount and mapping options, so that a filter
   /// with every pose right would score 1 throughout (spec §3.13.5). nullopt when not asked for.
