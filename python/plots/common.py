@@ -40,8 +40,8 @@ import matplotlib
 matplotlib.use("Agg")  # no display: the report is drawn on servers and in CI
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib.ticker import (FuncFormatter, LogLocator, MaxNLocator,  # noqa: E402
-                               NullFormatter)
+from matplotlib.ticker import (FormatStrFormatter, FuncFormatter, LogLocator,  # noqa: E402
+                               MaxNLocator, NullFormatter)
 
 # One colour per role, used by every figure (close to the paper's turquoise/red pairs).
 COLORS = {
@@ -267,3 +267,13 @@ def map_image(cells, name):
     b = h * block
     left, bottom = x0 - h / 2, y0 - h / 2
     return image, (left, left + b * (ix.max() + 1), bottom, bottom + b * (iy.max() + 1))
+
+
+def label_error_axis(ax, low, high):
+    """A log y-axis from `low` to `high` with labels at 1, 2 and 5 of each decade, so that an
+    error axis reads without counting minor ticks."""
+    ax.set_yscale("log")
+    ax.set_ylim(low, high)
+    ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax.yaxis.set_major_formatter(FormatStrFormatter("%g"))
+    ax.yaxis.set_minor_formatter(NullFormatter())

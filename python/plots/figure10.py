@@ -16,9 +16,9 @@ since the first update, on a log axis (one y-range for both).
 Writes <dir>/figure10.png and <dir>/figure10.svg.
 """
 import numpy as np
-from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
-from common import COLORS, figure_main, load_csv, map_image, save, subplots
+from common import (COLORS, figure_main, label_error_axis, load_csv, map_image, save,
+                    subplots)
 
 PROPOSALS = (("implicit", "implicit MCL"), ("bootstrap", "bootstrap MCL"))
 # An exact zero error would leave the log axis; errors below a millimetre are drawn at it.
@@ -76,14 +76,10 @@ def draw(d):
         a.plot(t["time_s"], e, color=COLORS["implicit" if p == "implicit" else "standard"],
                lw=0.7, marker="o", ms=2.5, alpha=0.85,
                label=f"{name}, M = {int(t['particles'][0])}")
-    a.set_yscale("log")
     # At least two decades with labels at 1, 2 and 5 of each, so the axis reads without counting
     # minor ticks.
     low = min(float(np.nanmin(np.maximum(tracks[p]["error_m"], ERROR_FLOOR))) for p, _ in PROPOSALS)
-    a.set_ylim(min(0.01, 0.8 * low), max(1.0, 1.5 * top))
-    a.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-    a.yaxis.set_major_formatter(FormatStrFormatter("%g"))
-    a.yaxis.set_minor_formatter(NullFormatter())
+    label_error_axis(a, min(0.01, 0.8 * low), max(1.0, 1.5 * top))
     a.set_xlabel("time since the first update [s]")
     a.set_ylabel("position error [m]")
     a.set_title("position error against time (first run)")

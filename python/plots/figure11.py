@@ -18,9 +18,9 @@ error of each relation against the time since the first scan, on a log axis.
 Writes <dir>/figure11.png and <dir>/figure11.svg.
 """
 import numpy as np
-from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
-from common import COLORS, DataError, figure_main, load_csv, map_image, save, subplots
+from common import (COLORS, DataError, figure_main, label_error_axis, load_csv, map_image,
+                    save, subplots)
 
 PROPOSALS = (("implicit", "implicit", COLORS["implicit"]),
              ("gmapping", "GMapping-style", COLORS["fastslam2"]),
@@ -77,12 +77,8 @@ def draw(d):
         top, low = max(top, float(e.max())), min(low, float(e.min()))
         a.plot(t["time_s"][keep], e, color=color, lw=0.6, marker="o", ms=2, alpha=0.8,
                label=f"{name}: mean {np.mean(t['relation_error_m'][keep]):.3f} m")
-    a.set_yscale("log")
-    # At least two decades with labels at 1, 2 and 5 of each.
-    a.set_ylim(min(0.8 * low, 0.015 * top), 1.5 * top)
-    a.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-    a.yaxis.set_major_formatter(FormatStrFormatter("%g"))
-    a.yaxis.set_minor_formatter(NullFormatter())
+    # At least two decades.
+    label_error_axis(a, min(0.8 * low, 0.015 * top), 1.5 * top)
     a.set_xlabel("time since the first scan [s]")
     a.set_ylabel("relation error, translation [m]")
     a.set_title("error of each relation (consecutive processed scans), first run")
