@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,6 +23,16 @@
 #include "tum_output.hpp"
 
 namespace implicit::app {
+
+experiments::GridSlamProgress grid_slam_progress(Progress& bar) {
+  auto ticked = std::make_shared<std::size_t>(0);
+  return [&bar, ticked](int run, std::size_t done, std::size_t total) {
+    const std::size_t now =
+        static_cast<std::size_t>(run) * 1000 + done * 1000 / std::max<std::size_t>(total, 1);
+    if (now > *ticked) bar.tick(now - *ticked);
+    *ticked = std::max(*ticked, now);
+  };
+}
 
 void add_grid_slam_options(CLI::App& sub, GridSlamCommand& g) {
   sub.add_option("--sensor", g.sensor,
@@ -132,14 +143,8 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
   // Progress in thousandths of each run (the scans a run processes are known once it starts).
   Progress bar(fmt::format("grid SLAM {} M={}", shared.method, o.filter.particles),
                static_cast<std::size_t>(settings.runs) * 1000, ctx.show_progress());
-  std::size_t ticked = 0;
-  const experiments::GridSlamResult r = experiments::run_grid_slam_experiment(
-      settings, log, [&](int run, std::size_t done, std::size_t total) {
-        const std::size_t now =
-            static_cast<std::size_t>(run) * 1000 + done * 1000 / std::max<std::size_t>(total, 1);
-        if (now > ticked) bar.tick(now - ticked);
-        ticked = std::max(ticked, now);
-      });
+  const experiments::GridSlamResult r =
+      experiments::run_grid_slam_experiment(settings, log, grid_slam_progress(bar));
   bar.finish();
   const slam::GridSlamRun& first = *r.first;
   if (!shared.trajectory.empty())

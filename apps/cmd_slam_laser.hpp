@@ -7,6 +7,7 @@
 
 #include "context.hpp"
 #include "experiments.hpp"
+#include "experiments/grid_slam.hpp"
 
 namespace CLI {
 class App;
@@ -24,6 +25,10 @@ struct GridSlamCommand {
   std::vector<CLI::Option*> landmark_only;
   CLI::Option *particles = nullptr, *datasets = nullptr;
 };
+
+/// Advances `bar` (of runs x 1000 units) in thousandths of each run: the scans a run processes
+/// are known only once it has started. The bar must outlive the returned function.
+experiments::GridSlamProgress grid_slam_progress(Progress& bar);
 
 /// Adds --sensor and the grid-SLAM options to the slam subcommand.
 void add_grid_slam_options(CLI::App& sub, GridSlamCommand& g);

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "cmd_slam_laser.hpp"
 #include "experiments/grid_slam_reproduce.hpp"
 #include "implicit/core/share_dir.hpp"
 #include "reproduce_plan.hpp"
@@ -51,19 +52,10 @@ json run_grid_point(const GridPoint& p, const RunContext& ctx) {
   s.seed = ctx.seed;
   const std::string label =
       fmt::format("grid SLAM {} {} M={}", p.log.name, slam::to_string(p.proposal), p.log.particles);
-  // Progress in thousandths of all the runs' scans (the scans a run processes are known once
-  // it has started).
   Progress bar(label, static_cast<std::size_t>(p.runs) * 1000, ctx.show_progress());
-  std::size_t ticked = 0;
-  const auto progress = [&](int run, std::size_t done, std::size_t total) {
-    const std::size_t now =
-        static_cast<std::size_t>(run) * 1000 + done * 1000 / std::max<std::size_t>(total, 1);
-    if (now > ticked) bar.tick(now - ticked);
-    ticked = std::max(ticked, now);
-  };
   json j = experiments::run_grid_slam_reproduce(
       s, p.log.figure ? ctx.out_dir : std::filesystem::path(),
-      p.log.figure && p.proposal == GridProposalKind::kImplicit, progress);
+      p.log.figure && p.proposal == GridProposalKind::kImplicit, grid_slam_progress(bar));
   bar.finish();
   // The data as the plan names it: the absolute path of the share tree says nothing portable.
   j["data"] = p.log.file;
