@@ -30,7 +30,7 @@ _paths.configure()
 from ._core import SampleResult, ess, log_sum_exp, resample, sample  # noqa: E402
 from ._implicit import InvalidArgument, ParseError, __version__  # noqa: E402
 from ._implicit import ParticleFilter  # noqa: E402
-from . import control, data, eval, laser, mcl, models, slam  # noqa: E402
+from . import control, data, eval, laser, mcl, models, slam, ssm  # noqa: E402
 
 __all__ = [
     "InvalidArgument",
@@ -49,4 +49,5 @@ __all__ = [
     "resample",
     "sample",
     "slam",
+    "ssm",
 ]

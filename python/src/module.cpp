@@ -18,6 +18,7 @@ void init_runs(py::module_& m);
 void init_control(py::module_& m);
 void init_laser(py::module_& m);
 void init_eval(py::module_& m);
+void init_user_model(py::module_& m);
 }  // namespace implicit::python
 
 PYBIND11_MODULE(_implicit, m) {
@@ -43,5 +44,6 @@ PYBIND11_MODULE(_implicit, m) {
   ip::init_laser(laser);
   auto eval = m.def_submodule("eval", "Trajectory scoring: APE and RPE.");
   ip::init_eval(eval);
+  ip::init_user_model(m);
   m.attr("__version__") = implicit::version();
 }
