@@ -1,13 +1,14 @@
 // Damped Newton for all particles in lockstep: core's newton_minimize() (core/newton.hpp) with
 // its objective calls batched across particles, so a Python F is called once per iteration (and
-// once per backtracking round) instead of once per particle and point.
+// once per round of up to eight backtracks) instead of once per particle and point.
 //
 // Per particle the rules are newton_minimize()'s without constraints: factor the exact Hessian,
 // else Levenberg damping (detail::factor_with_fallback, the same code), else steepest descent;
 // stop on the gradient, the Newton decrement, the step size or a small full step; Armijo
-// backtracking whose first trial is evaluated with derivatives and the others values only; a
-// non-finite F is a failed trial. The loop differs only in that each stage runs for every
-// unfinished particle before the next stage starts.
+// backtracking whose first trial is evaluated with derivatives and the others values only
+// (several per call, scanned in order: the same accepted step); a non-finite F is a failed trial.
+// The loop differs only in that each stage runs for every unfinished particle before the next
+// stage starts.
 
 #include <algorithm>
 #include <cmath>
@@ -71,46 +72,72 @@ void plan_step(State& s, const NewtonOptions& o) {
   s.accepted = false;
 }
 
+enum class Trial { kAccepted, kEnded, kNext };
+
+/// newton_minimize's verdict on trial k (step length s.t) with value ft: Armijo's sufficient
+/// decrease accepts it; the round-off floor or the last backtrack ends the particle (keeping x
+/// and its factor); otherwise the next, halved, step is tried.
+Trial judge(State& s, double ft, int k, const NewtonOptions& o) {
+  NewtonPoint& p = s.point;
+  const double value = p.value;
+  if (std::isfinite(ft) && ft <= value + o.armijo * s.t * s.slope) return Trial::kAccepted;
+  const double ulp = 8.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(value));
+  const bool at_floor = std::isfinite(ft) && std::abs(ft - value) <= ulp && -s.slope * s.t <= ulp;
+  if (at_floor || k == o.max_backtracks) {
+    p.status = at_floor || s.size <= 1e3 * o.step_tolerance * s.x_scale
+                   ? MinimizeStatus::kConverged
+                   : MinimizeStatus::kLineSearchFailed;
+    s.done = true;
+    return Trial::kEnded;
+  }
+  s.t *= 0.5;
+  return Trial::kNext;
+}
+
+/// Backtracks evaluated per particle in one call after the full step: the sequential rule
+/// takes the first acceptable length of t, t/2, t/4, ...; evaluating eight of them at once and
+/// scanning them in that order takes the same one, with an eighth of the Python calls.
+constexpr int kTrialsPerCall = 8;
+
 /// Armijo backtracking for every particle in `live` at once; afterwards s.accepted says whether
-/// the trial in `trials` row was taken (the ended particles are marked done).
+/// the particle moved (to p.x). The full step is evaluated with derivatives (into `full`, one
+/// row per particle of `live`), the backtracks values only, kTrialsPerCall per call.
 void line_search(BatchObjective& f, std::vector<State>& states, std::vector<std::size_t> live,
                  const NewtonOptions& o, Evaluation& full) {
   const Eigen::Index d = states[live.front()].point.x.size();
   Evaluation e;
-  for (int k = 0; k <= o.max_backtracks && !live.empty(); ++k) {
-    RowMatrix trial(static_cast<Eigen::Index>(live.size()), d);
+  for (int k = 0; k <= o.max_backtracks && !live.empty();) {
+    const int m = k == 0 ? 1 : std::min(kTrialsPerCall, o.max_backtracks - k + 1);
+    RowMatrix trial(static_cast<Eigen::Index>(live.size()) * m, d);
+    std::vector<std::size_t> owner;
+    owner.reserve(live.size() * static_cast<std::size_t>(m));
     for (std::size_t r = 0; r < live.size(); ++r) {
       const State& s = states[live[r]];
-      trial.row(static_cast<Eigen::Index>(r)) = (s.point.x + s.t * s.step).transpose();
+      double t = s.t;
+      for (int i = 0; i < m; ++i, t *= 0.5) {
+        trial.row(static_cast<Eigen::Index>(r) * m + i) = (s.point.x + t * s.step).transpose();
+        owner.push_back(live[r]);
+      }
     }
-    f.evaluate(live, trial, k == 0, k == 0 ? full : e);
+    f.evaluate(owner, trial, k == 0, k == 0 ? full : e);
     const Evaluation& got = k == 0 ? full : e;
     std::vector<std::size_t> next;
     for (std::size_t r = 0; r < live.size(); ++r) {
       State& s = states[live[r]];
-      NewtonPoint& p = s.point;
-      const double ft = got.value[static_cast<Eigen::Index>(r)];
-      const double value = p.value;
-      if (k == 0) s.full_value = ft;
-      const double ulp =
-          8.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(value));
-      if (std::isfinite(ft) && ft <= value + o.armijo * s.t * s.slope) {
-        s.accepted = true;
-        p.x = trial.row(static_cast<Eigen::Index>(r)).transpose();
-        continue;
+      Trial verdict = Trial::kNext;
+      for (int i = 0; i < m && verdict == Trial::kNext; ++i) {
+        const Eigen::Index row = static_cast<Eigen::Index>(r) * m + i;
+        const double ft = got.value[row];
+        if (k == 0) s.full_value = ft;
+        verdict = judge(s, ft, k + i, o);
+        if (verdict == Trial::kAccepted) {
+          s.accepted = true;
+          s.point.x = trial.row(row).transpose();
+        }
       }
-      const bool at_floor =
-          std::isfinite(ft) && std::abs(ft - value) <= ulp && -s.slope * s.t <= ulp;
-      if (at_floor || k == o.max_backtracks) {  // keep x (and its factor)
-        p.status = at_floor || s.size <= 1e3 * o.step_tolerance * s.x_scale
-                       ? MinimizeStatus::kConverged
-                       : MinimizeStatus::kLineSearchFailed;
-        s.done = true;
-        continue;
-      }
-      s.t *= 0.5;
-      next.push_back(live[r]);
+      if (verdict == Trial::kNext) next.push_back(live[r]);
     }
+    k += m;
     live = std::move(next);
   }
 }
