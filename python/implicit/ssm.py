@@ -68,6 +68,7 @@ class FilterResult:
         resampled: (T,) whether the step resampled (ESS below threshold * N).
         newton_iterations: (T,) mean Newton iterations per particle (implicit; else 0).
         newton_failures: (T,) particles without a minimiser (weight zero; implicit).
+        map_failures: (T,) particles whose random-map ray had no root (weight zero).
         objective_calls: (T,) batched calls of F per step (implicit; else 0).
         particles: (N, d) the final population; weights: (N,) its normalised weights.
     """
@@ -80,6 +81,7 @@ class FilterResult:
     resampled: np.ndarray
     newton_iterations: np.ndarray
     newton_failures: np.ndarray
+    map_failures: np.ndarray
     objective_calls: np.ndarray
     particles: np.ndarray
     weights: np.ndarray
@@ -87,7 +89,7 @@ class FilterResult:
 
 def particle_filter(model, observations, particles=1000, proposal="bootstrap",
                     resampling="systematic", threshold=0.5, seed=1, threads=0,
-                    max_newton_iterations=50):
+                    max_newton_iterations=50, map="linear"):
     """Filters `observations` (a sequence, one entry per step) with the model's callbacks.
 
     Args:
@@ -103,6 +105,8 @@ def particle_filter(model, observations, particles=1000, proposal="bootstrap",
         seed: an integer in [0, 2^64 - 1]; the run depends on it alone.
         threads: worker threads of the C++ parts (0: all); results do not depend on it.
         max_newton_iterations: Newton's iteration limit (implicit).
+        map: the implicit proposal's map, "linear" (x = mu + L^-T xi) or "random" (x on the ray
+            mu + lambda L^-T xi / |xi| where F(x) - F(mu) = |xi|^2 / 2; spec §1.3).
 
     Returns:
         FilterResult. A step at which every particle has weight zero raises InvalidArgument.
@@ -117,5 +121,5 @@ def particle_filter(model, observations, particles=1000, proposal="bootstrap",
         "hessian": model.hessian, "proposal_fn": model.proposal, "observations": observations,
         "particles": particles, "proposal": proposal, "resampling": resampling,
         "threshold": threshold, "seed": seed, "threads": threads,
-        "max_newton_iterations": max_newton_iterations})
+        "max_newton_iterations": max_newton_iterations, "map": map})
     return FilterResult(**r)

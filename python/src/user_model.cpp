@@ -1,7 +1,7 @@
 // implicit.ssm.particle_filter: a particle filter for a state-space model defined by Python
 // callbacks, on the library's engine (filter::ParticleEngine), with the bootstrap, the implicit
-// (spec §1.2, §1.3: Newton per particle, linear map, exact weights) or the user's own proposal,
-// ESS-triggered resampling with any of the four schemes, and the collectors of the run.
+// (spec §1.2, §1.3: Newton per particle, linear or random map, exact weights) or the user's own
+// proposal, ESS-triggered resampling with any of the four schemes, and the collectors of the run.
 //
 // Python is called a fixed number of times per step (the implicit proposal: once per Newton
 // iteration and backtracking round), never once per particle. Every random number comes from
@@ -36,6 +36,7 @@ struct Settings {
   double threshold = 0.5;
   std::uint64_t seed = 1;
   int threads = 0;
+  bool random_map = false;
   NewtonOptions newton;
 };
 
@@ -55,8 +56,32 @@ struct Moved {
   VecX increment;
   double newton_iterations = 0.0;  ///< mean over the particles (implicit)
   int newton_failures = 0;         ///< particles without an SPD factor (weight zero)
+  int map_failures = 0;            ///< random map: rays without a root (weight zero)
   int objective_calls = 0;         ///< batched evaluations of F (implicit)
 };
+
+/// The linear map X = mu + L^-T xi for every particle, then F(X) in one call and the weight
+/// (implicit_log_weight, as core's linear_map(), whose per-point evaluation cannot be batched).
+void linear_map_all(const Callbacks& cb, const std::vector<ssm::NewtonPoint>& points,
+                    const RowMatrix& xi, const RowMatrix& xp, Moved& m) {
+  const Eigen::Index n = xp.rows(), d = xp.cols();
+  m.x.resize(n, d);
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t j) {
+    const auto r = static_cast<Eigen::Index>(j);
+    const ssm::NewtonPoint& p = points[j];
+    VecX offset = xi.row(r).transpose();
+    if (p.factor_ok) p.factor.upper_solve_in_place(offset);
+    m.x.row(r) = (p.x + (p.factor_ok ? offset : VecX::Zero(d))).transpose();
+  });
+  const VecX fx = cb.objective(m.x, xp);
+  m.increment.resize(n);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    const ssm::NewtonPoint& p = points[static_cast<std::size_t>(r)];
+    m.increment[r] = p.factor_ok ? implicit_log_weight(static_cast<int>(d), xi.row(r).squaredNorm(),
+                                                       fx[r], p.factor.log_det_L())
+                                 : -std::numeric_limits<double>::infinity();
+  }
+}
 
 Moved implicit_step(const Callbacks& cb, const Settings& s, const RowMatrix& xp) {
   const Eigen::Index d = cb.dim;
@@ -66,31 +91,20 @@ Moved implicit_step(const Callbacks& cb, const Settings& s, const RowMatrix& xp)
   const std::vector<ssm::NewtonPoint> points = ssm::lockstep_newton(f, start, s.newton);
   const RowMatrix xi = normals(s, cb.step, purpose::kReference, d);
   Moved m;
-  m.x.resize(xp.rows(), d);
-  VecX log_det(xp.rows());
-  parallel_for(s.particles, [&](std::size_t j) {  // the linear map X = mu + L^-T xi
-    const auto r = static_cast<Eigen::Index>(j);
-    const ssm::NewtonPoint& p = points[j];
-    VecX offset = xi.row(r).transpose();
-    if (p.factor_ok) p.factor.upper_solve_in_place(offset);
-    m.x.row(r) = (p.x + (p.factor_ok ? offset : VecX::Zero(d))).transpose();
-    log_det[r] = p.factor_ok ? p.factor.log_det_L() : 0.0;
-  });
-  const VecX fx = cb.objective(m.x, xp);
-  m.increment.resize(xp.rows());
-  for (Eigen::Index r = 0; r < xp.rows(); ++r) {
-    const ssm::NewtonPoint& p = points[static_cast<std::size_t>(r)];
+  for (const ssm::NewtonPoint& p : points) {
     m.newton_iterations += p.iterations;
-    if (!p.factor_ok) {
-      ++m.newton_failures;
-      m.increment[r] = -std::numeric_limits<double>::infinity();
-      continue;
-    }
-    m.increment[r] =
-        implicit_log_weight(static_cast<int>(d), xi.row(r).squaredNorm(), fx[r], log_det[r]);
+    m.newton_failures += p.factor_ok ? 0 : 1;
+  }
+  if (s.random_map) {
+    ssm::MapResult r = ssm::lockstep_random_map(f, points, xi, RandomMapOptions{});
+    m.x = std::move(r.x);
+    m.increment = std::move(r.log_weight);
+    m.map_failures = r.failures - m.newton_failures;
+  } else {
+    linear_map_all(cb, points, xi, xp, m);
   }
   m.newton_iterations /= static_cast<double>(xp.rows());
-  m.objective_calls = f.calls + 1;
+  m.objective_calls = f.calls + (s.random_map ? 0 : 1);
   return m;
 }
 
@@ -113,7 +127,7 @@ Moved propose(const Callbacks& cb, const Settings& s, const RowMatrix& xp) {
 struct Collectors {
   RowMatrix mean, variance;
   std::vector<double> ess, log_likelihood, newton_iterations;
-  std::vector<int> newton_failures, objective_calls;
+  std::vector<int> newton_failures, map_failures, objective_calls;
   std::vector<bool> resampled;
 
   Collectors(std::size_t steps, Eigen::Index d)
@@ -168,6 +182,7 @@ py::dict run_filter(Callbacks& cb, const py::sequence& observations, const Setti
     c.log_likelihood.push_back(w.log_likelihood_increment);
     c.newton_iterations.push_back(m.newton_iterations);
     c.newton_failures.push_back(m.newton_failures);
+    c.map_failures.push_back(m.map_failures);
     c.objective_calls.push_back(m.objective_calls);
     const bool resample_now = needs_resampling(w.ess, s.particles, s.threshold);
     c.resampled.push_back(resample_now);
@@ -185,6 +200,7 @@ py::dict run_filter(Callbacks& cb, const py::sequence& observations, const Setti
   out["resampled"] = py::array(py::cast(c.resampled)).attr("astype")("bool");
   out["newton_iterations"] = adopt_vector(std::move(c.newton_iterations));
   out["newton_failures"] = py::array(py::cast(c.newton_failures));
+  out["map_failures"] = py::array(py::cast(c.map_failures));
   out["objective_calls"] = py::array(py::cast(c.objective_calls));
   out["particles"] = adopt(population(engine, d), {static_cast<py::ssize_t>(s.particles), d});
   out["weights"] =
@@ -224,6 +240,7 @@ py::dict user_model_filter(const py::dict& a) {
   s.particles = static_cast<std::size_t>(int_arg(a["particles"], "particles", 1, 10000000));
   s.scheme = parse_resampling_scheme(choice_arg(
       a["resampling"], "resampling", {"multinomial", "systematic", "stratified", "residual"}));
+  s.random_map = choice_arg(a["map"], "map", {"linear", "random"}) == "random";
   s.threshold = number_arg(a["threshold"], "threshold", 0.0, 1.0);
   s.seed = seed_arg(a["seed"], "seed");
   s.threads = static_cast<int>(int_arg(a["threads"], "threads", 0, 1024));

@@ -1,7 +1,7 @@
 #pragma once
 // A state-space model defined in Python (implicit.ssm): the pieces shared by the filter driver
 // (user_model.cpp) and the implicit proposal run for all particles in lockstep
-// (user_model_newton.cpp).
+// (user_model_newton.cpp) and the random map (user_model_random_map.cpp).
 //
 // The Python callbacks work on all particles at once (arrays of shape (k, d)), so the implicit
 // proposal cannot run core's newton_minimize() particle by particle: its objective is a
@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 
 #include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/newton.hpp"
 
 namespace implicit::python::ssm {
@@ -58,5 +59,18 @@ struct NewtonPoint {
 /// between the batched evaluations.
 std::vector<NewtonPoint> lockstep_newton(BatchObjective& f, const RowMatrix& x0,
                                          const NewtonOptions& options);
+
+/// The random map's samples (a failed ray: the centre) and log weights (-inf on failure).
+struct MapResult {
+  RowMatrix x;
+  VecX log_weight;
+  int failures = 0;  ///< rays without a root (RayStatus other than kOk): weight zero
+};
+
+/// The random map x = mu + lambda L^-T xi / |xi| for every particle at once, one batched call
+/// of F per round of the root finder (user_model_random_map.cpp); particles without an SPD
+/// factor get weight zero.
+MapResult lockstep_random_map(BatchObjective& f, const std::vector<NewtonPoint>& points,
+                              const RowMatrix& xi, const RandomMapOptions& options);
 
 }  // namespace implicit::python::ssm

@@ -75,18 +75,19 @@ def assert_within(runs, exact, what):
     assert np.all(z < Z_SIGMA), f"{what}: max |mean - exact| / SE = {z.max():.2f}"
 
 
-@pytest.mark.parametrize("proposal,extra", [
-    ("bootstrap", {}),
-    ("implicit", {}),
+@pytest.mark.parametrize("proposal,extra,settings", [
+    ("bootstrap", {}, {}),
+    ("implicit", {}, {}),
+    ("implicit", {}, {"map": "random"}),
     ("implicit", {"gradient": lambda t, x, xp, y: (x - A * xp) / Q - (y - x) / R,
-                  "hessian": lambda t, x, xp, y: np.full((len(x), 1, 1), 1 / Q + 1 / R)}),
-    ("guided", {"proposal": guided_proposal(1.5)}),
+                  "hessian": lambda t, x, xp, y: np.full((len(x), 1, 1), 1 / Q + 1 / R)}, {}),
+    ("guided", {"proposal": guided_proposal(1.5)}, {}),
 ])
-def test_linear_gaussian_agrees_with_kalman(proposal, extra):
+def test_linear_gaussian_agrees_with_kalman(proposal, extra, settings):
     ys = observations()
     means, variances, ll = kalman(ys)
     model = linear_gaussian(**extra)
-    runs = [ssm.particle_filter(model, ys, particles=500, proposal=proposal, seed=s)
+    runs = [ssm.particle_filter(model, ys, particles=500, proposal=proposal, seed=s, **settings)
             for s in range(1, 21)]
     assert_within([r.mean[:, 0] for r in runs], means, "filtering mean")
     assert_within([r.variance[:, 0] for r in runs], variances, "filtering variance")
@@ -95,7 +96,8 @@ def test_linear_gaussian_agrees_with_kalman(proposal, extra):
     assert all(np.allclose(r.log_likelihood_increments.sum(), r.log_likelihood) for r in runs)
 
 
-def test_implicit_weights_are_exact_for_a_gaussian_step():
+@pytest.mark.parametrize("implicit_map", ["linear", "random"])
+def test_implicit_weights_are_exact_for_a_gaussian_step(implicit_map):
     # For a linear-Gaussian step the implicit proposal is the optimal one: particle j's weight
     # is p(y_1 | x_0^j) = N(y_1; A x_0^j, Q + R) exactly, so the first log-likelihood
     # increment is the log mean of those, computed here from the initial draws themselves.
@@ -109,24 +111,28 @@ def test_implicit_weights_are_exact_for_a_gaussian_step():
                       transition_logpdf=linear_gaussian().transition_logpdf,
                       observation_logpdf=linear_gaussian().observation_logpdf)
     y1 = 0.7
-    r = ssm.particle_filter(model, [y1], particles=300, proposal="implicit", seed=4)
+    r = ssm.particle_filter(model, [y1], particles=300, proposal="implicit", seed=4,
+                            map=implicit_map)
     inc = gauss_logpdf(y1 - A * seen["x0"][:, 0], Q + R)
     expected = np.log(np.mean(np.exp(inc)))
-    # Finite-difference derivatives: the Newton centre is off by round-off only, and for a
-    # Gaussian F the weight does not depend on the centre at all.
+    # Both maps are exact for a Gaussian F (the random map's root is lambda = |xi|). With
+    # finite-difference derivatives the Hessian is off by about 1e-8 relative, which moves the
+    # linear map's weights by as much; the random map solves F's own level set.
     assert r.log_likelihood_increments[0] == pytest.approx(expected, abs=1e-9)
     assert r.ess[0] == pytest.approx(1.0 / np.sum((np.exp(inc) / np.exp(inc).sum()) ** 2),
                                      rel=1e-8)
-    assert r.newton_failures[0] == 0 and r.newton_iterations[0] >= 1
+    assert r.newton_failures[0] == 0 and r.map_failures[0] == 0 and r.newton_iterations[0] >= 1
 
 
-@pytest.mark.parametrize("proposal", ["bootstrap", "implicit", "guided"])
+@pytest.mark.parametrize("proposal,implicit_map", [("bootstrap", "linear"), ("implicit", "linear"),
+                                                   ("implicit", "random"), ("guided", "linear")])
 @pytest.mark.parametrize("scheme", ["multinomial", "systematic", "stratified", "residual"])
-def test_threads_do_not_change_results(proposal, scheme):
+def test_threads_do_not_change_results(proposal, implicit_map, scheme):
     model = linear_gaussian(proposal=guided_proposal(1.2))
     ys = observations(steps=15)
     one, two = (ssm.particle_filter(model, ys, particles=400, proposal=proposal,
-                                    resampling=scheme, threshold=0.9, seed=11, threads=k)
+                                    resampling=scheme, threshold=0.9, seed=11, threads=k,
+                                    map=implicit_map)
                 for k in (1, 2))
     assert one.resampled.any()
     for name in ("mean", "variance", "ess", "log_likelihood_increments", "particles", "weights"):

@@ -53,6 +53,8 @@ BAD = [
      r"^proposal: expected 'bootstrap', 'implicit' or 'guided', got 'optimal'$"),
     (run(resampling="none"), r"^resampling: expected 'multinomial', 'systematic', 'stratified' "
                              r"or 'residual', got 'none'$"),
+    (run(map="curved"), r"^map: expected 'linear' or 'random', got 'curved'$"),
+    (run(map=None), r"^map: expected 'linear' or 'random', got NoneType$"),
     (run(threshold=1.5), r"^threshold: expected a number in \[0, 1\], got 1\.5$"),
     (run(threshold=math.nan), r"^threshold: expected a number in \[0, 1\], got nan$"),
     (run(seed=-1), r"^seed: expected an integer in \[0, 2\^64 - 1\], got -1$"),
