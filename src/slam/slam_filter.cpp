@@ -7,7 +7,6 @@
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
-#include <variant>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -191,25 +190,6 @@ struct ParticleOutcome {
   }
 };
 
-/// The pose proposal of a particle method.
-std::variant<FastSlam1Proposal, FastSlam2Proposal, ImplicitPoseProposal> pose_proposal(
-    const SlamOptions& o) {
-  switch (o.method) {
-    case SlamMethod::kFastSlam1:
-      return FastSlam1Proposal{};
-    case SlamMethod::kFastSlam2:
-      return FastSlam2Proposal{};
-    case SlamMethod::kImplicit:
-    case SlamMethod::kImplicitRb:
-      return ImplicitPoseProposal{
-          o.method == SlamMethod::kImplicit,
-          pose_newton_options(o.newton_max_iterations, o.newton_decrement_tolerance)};
-    case SlamMethod::kEkf:
-      break;
-  }
-  throw InvalidArgument("SLAM: EKF-SLAM is not a particle method and has no pose proposal");
-}
-
 // Below this map size the linear scan (with its exact range check) is as fast or faster than the
 // grid look-ups: measured 3.5x faster on Victoria Park at 400-700 landmarks, 2-3x slower on the
 // dense synthetic field at 1 000 (docs/performance.md). Both give the same association.
@@ -217,13 +197,14 @@ constexpr std::size_t kIndexedAssociationMinLandmarks = 1024;
 
 class ParticleSlamFilter final : public SlamFilter {
  public:
-  ParticleSlamFilter(const SlamOptions& opt, const Pose& x0)
+  ParticleSlamFilter(const SlamOptions& opt, const Pose& x0, AnyPoseProposal proposal)
       : opt_(opt),
         base_(motion_model(opt)),
         model_(base_),
         m_(static_cast<std::size_t>(opt.particles)),
         engine_(m_, Particle{x0, {}}),
-        proposal_(pose_proposal(opt)) {
+        proposal_(std::move(proposal)),
+        point_landmarks_(proposal_.point_landmarks()) {
     outcome_.resize(m_);
     estimate_.mean = x0;
   }
@@ -385,15 +366,16 @@ class ParticleSlamFilter final : public SlamFilter {
       return zero_weight(p, fresh, oc);
     }
     associate(p, f, sigma1, obs, slots_before, known, fresh);
-    const PoseStep step{opt_.sensor, f, sigma1, llt1, known};
-    Rng rng({opt_.seed, n, j, std::visit([](const auto& q) { return q.kPurpose; }, proposal_)});
-    if (known.empty() && opt_.method == SlamMethod::kImplicit && fresh.size() == 1)
-      return place_with_new_landmark(p, step, fresh[0], rng, oc);
+    const AnyPoseProposal::Step step{opt_.sensor, f, sigma1, llt1, known};
+    Rng rng({opt_.seed, n, j, proposal_.purpose()});
+    if (known.empty() && fresh.size() == 1)
+      if (const auto joint = proposal_.propose_with_new_landmark(step, fresh[0], rng))
+        return place_with_new_landmark(p, f, fresh[0], *joint, oc);
     PoseDraw d;
     if (known.empty()) {
       d.x = draw_from_motion(step, rng);
     } else {
-      d = std::visit([&](const auto& q) { return q.propose(step, rng); }, proposal_);
+      d = proposal_.propose(step, rng);
       if (d.newton_solved) {
         oc.newton_iterations += d.newton_iterations;
         ++oc.newton_solves;
@@ -451,32 +433,35 @@ class ParticleSlamFilter final : public SlamFilter {
     }
   }
 
-  // (A), the only detection is of a new landmark: pose and landmark jointly by the 5-D linear
-  // map around the closed-form minimiser.
-  double place_with_new_landmark(Particle& p, const PoseStep& step, const Measurement& z, Rng& rng,
-                                 ParticleOutcome& oc) const {
-    const NewLandmarkObjective F(step.f, step.sigma1, z, opt_.sensor.noise_covariance());
-    SmallFactor<5> factor;
-    p.x = step.f;
-    if (!F.ok() || !factor.compute(F.hessian_at_minimizer()))
+  // The only detection is of a new landmark and the proposal drew the pose and the landmark
+  // jointly (implicit SLAM (A)); the weight gains p0 / z_range (NewLandmarkDraw).
+  double place_with_new_landmark(Particle& p, const Pose& f, const Measurement& z,
+                                 const NewLandmarkDraw& d, ParticleOutcome& oc) const {
+    p.x = f;
+    if (d.failed) return zero_weight(p, std::span<const Measurement>(&z, 1), oc);
+    const double log_w = d.log_weight + std::log(opt_.new_landmark_density) - std::log(z(0));
+    if (!d.x.allFinite() || !d.m.allFinite() || std::isnan(log_w))
       return zero_weight(p, std::span<const Measurement>(&z, 1), oc);
-    Vec<5> sample;
-    const double log_w =
-        linear_map(WithConstant{F}, F.minimizer(), factor, rng.normal_vector<5>(), sample) +
-        std::log(opt_.new_landmark_density) - std::log(z(0));
-    if (!sample.allFinite() || std::isnan(log_w))
-      return zero_weight(p, std::span<const Measurement>(&z, 1), oc);
-    oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()),
-                          LandmarkEstimate{sample.tail<2>(), Mat<2>::Zero()});
-    p.x = sample.head<3>();
-    p.map.push_back({sample.tail<2>(), Mat<2>::Zero()});
+    p.x = d.x;
+    const LandmarkEstimate l = new_landmark(p.x, d.m, z);
+    oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()), l);
+    p.map.push_back(l);
     ++oc.new_landmarks;
     return log_w;
   }
 
+  // A new landmark at m, seen as z from x: a point (covariance zero) or an EKF landmark with the
+  // covariance G_z Sigma2 G_z^T of the inverse measurement.
+  LandmarkEstimate new_landmark(const Pose& x, const Landmark& m, const Measurement& z) const {
+    if (point_landmarks_) return {m, Mat<2>::Zero()};
+    const Mat<2>& r = opt_.sensor.noise_covariance();
+    const Mat<2> gz = RangeBearingSensor::inverse_jacobian_measurement(x, z);
+    return {m, Mat<2>(gz * r * gz.transpose())};
+  }
+
   // EKF updates of the known landmarks at the sampled pose; (A)'s point landmarks stay fixed.
   void update_known(Particle& p, std::span<const KnownLandmark> known, ParticleOutcome& oc) const {
-    if (opt_.method == SlamMethod::kImplicit) {
+    if (point_landmarks_) {
       oc.updates += static_cast<int>(known.size());
       return;
     }
@@ -506,13 +491,9 @@ class ParticleSlamFilter final : public SlamFilter {
   // density p0 to the weight (spec §3.10). Returns log_w with those factors.
   double add_new_landmarks(Particle& p, std::span<const Measurement> fresh, ParticleOutcome& oc,
                            double log_w) const {
-    const bool point_landmarks = opt_.method == SlamMethod::kImplicit;
-    const Mat<2>& r = opt_.sensor.noise_covariance();
     for (const Measurement& z : fresh) {
-      const Mat<2> gz = RangeBearingSensor::inverse_jacobian_measurement(p.x, z);
-      const LandmarkEstimate fresh_landmark{
-          RangeBearingSensor::inverse(p.x, z),
-          point_landmarks ? Mat<2>::Zero() : Mat<2>(gz * r * gz.transpose())};
+      const LandmarkEstimate fresh_landmark =
+          new_landmark(p.x, RangeBearingSensor::inverse(p.x, z), z);
       oc.moved.emplace_back(static_cast<std::uint32_t>(p.map.size()), fresh_landmark);
       p.map.push_back(fresh_landmark);
       log_w += std::log(opt_.new_landmark_density);
@@ -527,8 +508,8 @@ class ParticleSlamFilter final : public SlamFilter {
   std::size_t m_;
   filter::ParticleEngine<Particle> engine_;
   filter::PoseMoments pose_moments_{true};
-  /// The pose proposal of opt_.method (EKF-SLAM is not a particle method).
-  std::variant<FastSlam1Proposal, FastSlam2Proposal, ImplicitPoseProposal> proposal_;
+  AnyPoseProposal proposal_;
+  bool point_landmarks_;  ///< the proposal's landmark model: points fixed at creation, or EKF
   std::vector<ParticleOutcome> outcome_;
   // Known association: the slot of each landmark id. A hash map, not a table indexed by id: ids
   // are any int in [0, 2^31 - 1], and a table up to the largest would take 8 GiB.
@@ -550,7 +531,32 @@ std::unique_ptr<SlamFilter> make_slam_filter(const SlamOptions& options, const P
   require(x0.allFinite(), "SLAM filter: expected a finite initial pose, got ({}, {}, {})", x0(0),
           x0(1), x0(2));
   if (options.method == SlamMethod::kEkf) return std::make_unique<EkfSlamFilter>(options, x0);
-  return std::make_unique<ParticleSlamFilter>(options, x0);
+  return make_particle_slam_filter(options, x0, pose_proposal(options));
+}
+
+AnyPoseProposal pose_proposal(const SlamOptions& o) {
+  switch (o.method) {
+    case SlamMethod::kFastSlam1:
+      return FastSlam1Proposal{};
+    case SlamMethod::kFastSlam2:
+      return FastSlam2Proposal{};
+    case SlamMethod::kImplicit:
+    case SlamMethod::kImplicitRb:
+      return ImplicitPoseProposal{
+          o.method == SlamMethod::kImplicit,
+          pose_newton_options(o.newton_max_iterations, o.newton_decrement_tolerance)};
+    case SlamMethod::kEkf:
+      break;
+  }
+  throw InvalidArgument("SLAM: EKF-SLAM is not a particle method and has no pose proposal");
+}
+
+std::unique_ptr<SlamFilter> make_particle_slam_filter(const SlamOptions& options, const Pose& x0,
+                                                      AnyPoseProposal proposal) {
+  options.validate();
+  require(x0.allFinite(), "SLAM filter: expected a finite initial pose, got ({}, {}, {})", x0(0),
+          x0(1), x0(2));
+  return std::make_unique<ParticleSlamFilter>(options, x0, std::move(proposal));
 }
 
 }  // namespace implicit::slam

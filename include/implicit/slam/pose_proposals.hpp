@@ -12,16 +12,26 @@
 //                         landmarks, S_i = Sigma2; (B) EKF landmarks, S_i = H_m P_i H_m^T + Sigma2
 //                         frozen at f.
 //
-//   PoseStep step{sensor, f, sigma1, sigma1_llt, known};
+// A proposal is any type modelling LandmarkPoseProposal (below): the three above, or a user's,
+// which plugs into make_particle_slam_filter (slam_filter.hpp) without editing the library. It
+// reads the sensor through the observation seam's concept (robot::LandmarkSensor), so a proposal
+// written against PoseStep<Sensor> serves any landmark sensor.
+//
+//   PoseStep<> step{sensor, f, sigma1, sigma1_llt, known};
 //   PoseDraw d = FastSlam2Proposal{}.propose(step, rng);   // d.log_weight = -inf: weight zero
 //
 // A proposal's draws come from the stream of its kPurpose; it never throws or allocates per
 // call (ImplicitPoseProposal keeps a per-thread buffer of landmark terms).
 
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <span>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -30,14 +40,16 @@
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/newton.hpp"
 #include "implicit/core/rng.hpp"
+#include "implicit/robot/models.hpp"
 #include "implicit/robot/range_bearing.hpp"
 #include "implicit/slam/proposals.hpp"
 
 namespace implicit::slam {
 
-/// What a pose proposal sees of one particle at one step.
+/// What a pose proposal sees of one particle at one step (all of it valid during the call only).
+template <robot::LandmarkSensor Sensor = robot::RangeBearingSensor>
 struct PoseStep {
-  const robot::RangeBearingSensor& sensor;
+  const Sensor& sensor;                  ///< h(x, m), its Jacobians and Sigma2
   const Pose& f;                         ///< the motion model's prediction
   const Mat<3>& sigma1;                  ///< process covariance at the previous pose
   const Eigen::LLT<Mat<3>>& sigma1_llt;  ///< its Cholesky factor (succeeded)
@@ -54,8 +66,54 @@ struct PoseDraw {
   int newton_iterations = 0;
 };
 
+/// A pose drawn jointly with the landmark of a step's only detection, which is new (implicit
+/// SLAM (A)). log_weight is against the target N(x; f, Sigma1) N(z; h(x, m), Sigma2) with a flat
+/// prior on m in the plane; the filter multiplies by p0 / z_range, which makes that prior the
+/// new-landmark density p0 in measurement units (spec §3.10).
+struct NewLandmarkDraw {
+  Pose x = Pose::Zero();
+  Landmark m = Landmark::Zero();
+  double log_weight = 0.0;
+  bool failed = false;  ///< weight zero: the filter places the landmark from x = f instead
+};
+
+/// A pose proposal of particle landmark SLAM, the filter's plug-in (make_particle_slam_filter):
+///   P::kPurpose                 the Rng purpose (core/rng.hpp) of its draws; the filter gives
+///                               it Rng({seed, step, particle, kPurpose}).
+///   p.propose(step, rng)        -> PoseDraw: the particle's new pose and log weight increment,
+///                               called only at a step where the particle sees at least one
+///                               known landmark (step.known); at other steps the filter draws
+///                               X ~ N(f, Sigma1) from the same stream (draw_from_motion). It is
+///                               called in parallel, one particle per call: const, no throw, no
+///                               allocation per call.
+/// Optional members (detected, defaults in brackets):
+///   p.point_landmarks()         -> bool [false]: landmarks are points fixed at creation (zero
+///                               covariance, no EKF update); false: EKF landmarks.
+///   p.propose_with_new_landmark(step, z, rng) -> std::optional<NewLandmarkDraw> [none]: at a
+///                               step whose only detection z is of a new landmark, the pose and
+///                               that landmark jointly; std::nullopt: the usual path.
+/// The filter, not the proposal, does association, new landmarks and the EKF updates.
+template <typename P, typename Sensor = robot::RangeBearingSensor>
+concept LandmarkPoseProposal = std::copy_constructible<P> &&
+    requires(const P& p, const PoseStep<Sensor>& s, Rng& rng) {
+  { P::kPurpose } -> std::convertible_to<std::uint64_t>;
+  { p.propose(s, rng) } -> std::same_as<PoseDraw>;
+};
+
+/// The optional members of LandmarkPoseProposal.
+template <typename P>
+concept PointLandmarkProposal = requires(const P& p) {
+  { p.point_landmarks() } -> std::convertible_to<bool>;
+};
+template <typename P, typename Sensor = robot::RangeBearingSensor>
+concept JointNewLandmarkProposal = requires(const P& p, const PoseStep<Sensor>& s,
+                                            const Measurement& z, Rng& rng) {
+  { p.propose_with_new_landmark(s, z, rng) } -> std::same_as<std::optional<NewLandmarkDraw>>;
+};
+
 /// X ~ N(f, Sigma1): the move of every method at a step without a known landmark.
-inline Pose draw_from_motion(const PoseStep& s, Rng& rng) {
+template <typename Sensor>
+Pose draw_from_motion(const PoseStep<Sensor>& s, Rng& rng) {
   return s.f + s.sigma1_llt.matrixL() * rng.normal_vector<3>();
 }
 
@@ -73,15 +131,15 @@ inline double log_normal2(const Vec<2>& e, const Eigen::LLT<Mat<2>>& llt) {
 
 struct FastSlam1Proposal {
   static constexpr std::uint64_t kPurpose = purpose::kProposal;
-  PoseDraw propose(const PoseStep& s, Rng& rng) const {
+  template <typename Sensor>
+  PoseDraw propose(const PoseStep<Sensor>& s, Rng& rng) const {
     PoseDraw d;
     d.x = draw_from_motion(s, rng);
     const Mat<2>& r = s.sensor.noise_covariance();
     for (const auto& k : s.known) {
-      const Mat<2> hm = s.sensor.jacobian_landmark(d.x, k.mean);
+      const Mat<2> hm = landmark_jacobian(s.sensor, d.x, k.mean);
       const Eigen::LLT<Mat<2>> llt(hm * k.cov * hm.transpose() + r);
-      const Measurement nu =
-          -robot::RangeBearingSensor::residual(s.sensor.predict(d.x, k.mean), k.z);
+      const Measurement nu = -s.sensor.residual(s.sensor.predict(d.x, k.mean), k.z);
       d.log_weight += llt.info() == Eigen::Success ? detail::log_normal2(nu, llt)
                                                    : -std::numeric_limits<double>::infinity();
     }
@@ -91,7 +149,8 @@ struct FastSlam1Proposal {
 
 struct FastSlam2Proposal {
   static constexpr std::uint64_t kPurpose = purpose::kProposal;
-  PoseDraw propose(const PoseStep& s, Rng& rng) const {
+  template <typename Sensor>
+  PoseDraw propose(const PoseStep<Sensor>& s, Rng& rng) const {
     PoseDraw d;
     d.x = s.f;
     const LinearizedProposal lp = linearized_optimal_proposal(s.sensor, s.f, s.sigma1_llt, s.known);
@@ -103,12 +162,16 @@ struct FastSlam2Proposal {
   }
 };
 
+/// Implicit SLAM, (A) with point_landmarks (the paper's) or (B) without. Its objectives are
+/// written out for the range-bearing sensor (proposals.hpp).
 struct ImplicitPoseProposal {
   static constexpr std::uint64_t kPurpose = purpose::kReference;
-  bool point_landmarks = false;  ///< (A): S_i = Sigma2; (B): the landmark covariance enters S_i
+  bool point = false;  ///< (A): S_i = Sigma2, landmarks fixed; (B): S_i = H_m P_i H_m^T + Sigma2
   NewtonOptions newton = pose_newton_options(20, 1e-10);
 
-  PoseDraw propose(const PoseStep& s, Rng& rng) const {
+  bool point_landmarks() const { return point; }
+
+  PoseDraw propose(const PoseStep<robot::RangeBearingSensor>& s, Rng& rng) const {
     thread_local std::vector<LandmarkTerm> terms;
     PoseDraw d;
     d.x = s.f;
@@ -117,7 +180,7 @@ struct ImplicitPoseProposal {
     for (std::size_t i = 0; i < s.known.size(); ++i) {
       const auto& k = s.known[i];
       Mat<2> sk = s.sensor.noise_covariance();
-      if (!point_landmarks) {
+      if (!point) {
         const Mat<2> hm = s.sensor.jacobian_landmark(s.f, k.mean);
         sk += hm * k.cov * hm.transpose();
       }
@@ -133,6 +196,76 @@ struct ImplicitPoseProposal {
     d.log_weight = linear_map(WithConstant{F}, pm.x, pm.factor, rng.normal_vector<3>(), d.x);
     return d;
   }
+
+  /// (A): the pose and the new landmark jointly, by the 5-D linear map around the closed-form
+  /// minimiser of NewLandmarkObjective. (B): std::nullopt (the landmark is placed by inversion).
+  std::optional<NewLandmarkDraw> propose_with_new_landmark(
+      const PoseStep<robot::RangeBearingSensor>& s, const Measurement& z, Rng& rng) const {
+    if (!point) return std::nullopt;
+    NewLandmarkDraw d;
+    d.x = s.f;
+    const NewLandmarkObjective F(s.f, s.sigma1, z, s.sensor.noise_covariance());
+    SmallFactor<5> factor;
+    if (!F.ok() || !factor.compute(F.hessian_at_minimizer())) {
+      d.failed = true;
+      return d;
+    }
+    Vec<5> sample;
+    d.log_weight =
+        linear_map(WithConstant{F}, F.minimizer(), factor, rng.normal_vector<5>(), sample);
+    d.x = sample.head<3>();
+    d.m = sample.tail<2>();
+    return d;
+  }
+};
+
+static_assert(LandmarkPoseProposal<FastSlam1Proposal>);
+static_assert(LandmarkPoseProposal<FastSlam2Proposal>);
+static_assert(LandmarkPoseProposal<ImplicitPoseProposal>);
+static_assert(PointLandmarkProposal<ImplicitPoseProposal>);
+static_assert(JointNewLandmarkProposal<ImplicitPoseProposal>);
+static_assert(LandmarkPoseProposal<FastSlam1Proposal, robot::MountedRangeBearingSensor>);
+static_assert(LandmarkPoseProposal<FastSlam2Proposal, robot::MountedRangeBearingSensor>);
+
+/// Any LandmarkPoseProposal for the filter's sensor, behind one type: what the particle SLAM
+/// filter holds. One indirect call per particle and step (the proposal itself is not copied per
+/// call; copies of an AnyPoseProposal share it).
+class AnyPoseProposal {
+ public:
+  using Step = PoseStep<robot::RangeBearingSensor>;
+
+  template <LandmarkPoseProposal P>
+  requires(!std::same_as<std::remove_cvref_t<P>, AnyPoseProposal>)
+      AnyPoseProposal(P proposal)  // NOLINT(google-explicit-constructor): any proposal converts
+      : self_(std::make_shared<const P>(std::move(proposal))),
+        purpose_(P::kPurpose),
+        propose_([](const void* self, const Step& s, Rng& rng) {
+          return static_cast<const P*>(self)->propose(s, rng);
+        }) {
+    if constexpr (PointLandmarkProposal<P>)
+      point_landmarks_ = static_cast<const P*>(self_.get())->point_landmarks();
+    if constexpr (JointNewLandmarkProposal<P>)
+      joint_ = [](const void* self, const Step& s, const Measurement& z, Rng& rng) {
+        return static_cast<const P*>(self)->propose_with_new_landmark(s, z, rng);
+      };
+  }
+
+  std::uint64_t purpose() const { return purpose_; }
+  bool point_landmarks() const { return point_landmarks_; }
+  PoseDraw propose(const Step& s, Rng& rng) const { return propose_(self_.get(), s, rng); }
+  std::optional<NewLandmarkDraw> propose_with_new_landmark(const Step& s, const Measurement& z,
+                                                           Rng& rng) const {
+    if (joint_ == nullptr) return std::nullopt;
+    return joint_(self_.get(), s, z, rng);
+  }
+
+ private:
+  std::shared_ptr<const void> self_;
+  std::uint64_t purpose_ = 0;
+  bool point_landmarks_ = false;
+  PoseDraw (*propose_)(const void*, const Step&, Rng&) = nullptr;
+  std::optional<NewLandmarkDraw> (*joint_)(const void*, const Step&, const Measurement&,
+                                           Rng&) = nullptr;
 };
 
 }  // namespace implicit::slam

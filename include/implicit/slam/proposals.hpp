@@ -36,6 +36,7 @@
 #include "implicit/core/newton.hpp"
 #include "implicit/core/types.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/robot/models.hpp"
 #include "implicit/robot/range_bearing.hpp"
 
 namespace implicit::slam {
@@ -205,6 +206,16 @@ struct KnownLandmark {
   Mat<2> cov = Mat<2>::Zero();
 };
 
+/// J_h_m (2x2), the Jacobian of h(x, m) in the landmark: the sensor's jacobian_landmark when it
+/// has one, else minus the position columns of J_h_x (h depends on m - (x, y) only).
+template <robot::LandmarkSensor Sensor>
+Mat<2> landmark_jacobian(const Sensor& sensor, const Vec<3>& x, const Vec<2>& m) {
+  if constexpr (requires { sensor.jacobian_landmark(x, m); })
+    return sensor.jacobian_landmark(x, m);
+  else
+    return -sensor.jacobian_pose(x, m).template leftCols<2>();
+}
+
 /// FastSLAM 2.0's proposal: the measurement model linearised at the prediction f (Montemerlo et
 /// al. 2003), all detections jointly:
 ///   Lambda = Sigma1^-1 + sum_i H_x,i^T Q_i^-1 H_x,i,   Q_i = Sigma2 + H_m,i P_i H_m,i^T,
@@ -218,10 +229,10 @@ struct LinearizedProposal {
   bool ok = false;
 };
 
-inline LinearizedProposal linearized_optimal_proposal(const robot::RangeBearingSensor& sensor,
-                                                      const Vec<3>& f,
-                                                      const Eigen::LLT<Mat<3>>& sigma1_llt,
-                                                      std::span<const KnownLandmark> known) {
+template <robot::LandmarkSensor Sensor>
+LinearizedProposal linearized_optimal_proposal(const Sensor& sensor, const Vec<3>& f,
+                                               const Eigen::LLT<Mat<3>>& sigma1_llt,
+                                               std::span<const KnownLandmark> known) {
   LinearizedProposal out;
   const Mat<2>& r = sensor.noise_covariance();
   Mat<3> lambda = sigma1_llt.solve(Mat<3>::Identity());
@@ -232,7 +243,7 @@ inline LinearizedProposal linearized_optimal_proposal(const robot::RangeBearingS
     const Mat<2> hm = -hx.leftCols<2>();
     const Eigen::LLT<Mat<2>> llt(hm * k.cov * hm.transpose() + r);
     if (llt.info() != Eigen::Success) return out;
-    const Vec<2> nu = -robot::RangeBearingSensor::residual(sensor.predict(f, k.mean), k.z);
+    const Vec<2> nu = -sensor.residual(sensor.predict(f, k.mean), k.z);
     const Vec<2> qnu = llt.solve(nu);
     lambda.noalias() += hx.transpose() * llt.solve(hx);
     b.noalias() += hx.transpose() * qnu;

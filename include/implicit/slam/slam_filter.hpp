@@ -44,6 +44,7 @@
 #include "implicit/robot/range_bearing.hpp"
 #include "implicit/robot/ute_model.hpp"
 #include "implicit/slam/dataset.hpp"
+#include "implicit/slam/pose_proposals.hpp"
 
 namespace implicit::slam {
 
@@ -129,5 +130,23 @@ class SlamFilter {
 
 /// Builds the estimator chosen in options.method, starting at the known pose x0.
 std::unique_ptr<SlamFilter> make_slam_filter(const SlamOptions& options, const Pose& x0);
+
+/// Particle SLAM with any pose proposal (a type modelling LandmarkPoseProposal, e.g. a user's,
+/// converts to AnyPoseProposal), starting at x0. Everything but the proposal comes from options:
+/// association, particles, seed, motion model, sensor, gate, p0, resampling; options.method and
+/// the newton_* fields are not read (the proposal carries its own).
+///
+///   struct MyProposal {
+///     static constexpr std::uint64_t kPurpose = purpose::kProposal;
+///     PoseDraw propose(const PoseStep<>& step, Rng& rng) const;
+///   };
+///   auto filter = slam::make_particle_slam_filter(options, x0, MyProposal{});
+std::unique_ptr<SlamFilter> make_particle_slam_filter(const SlamOptions& options, const Pose& x0,
+                                                      AnyPoseProposal proposal);
+
+/// The built-in proposal of options.method (fastslam1, fastslam2, implicit, implicit-rb, with
+/// options' Newton settings): make_slam_filter(options, x0) is make_particle_slam_filter(options,
+/// x0, pose_proposal(options)) for those. Throws InvalidArgument for kEkf.
+AnyPoseProposal pose_proposal(const SlamOptions& options);
 
 }  // namespace implicit::slam
