@@ -19,38 +19,30 @@
 namespace implicit::app {
 namespace {
 
-// A run as numbers that travel between ranks (parallel_runs.hpp): the scalars, then x and u.
-RunRecord to_record(const control::HimmelblauRun& run) {
-  RunRecord r = {run.cost,
-                 run.final_f,
-                 run.ess_mean,
-                 static_cast<double>(run.failed_minimizations),
-                 run.last_noise(0),
-                 run.last_noise(1),
-                 run.max_laplace_gap,
-                 static_cast<double>(run.x.size()),
-                 static_cast<double>(run.u.size())};
-  for (const auto* path : {&run.x, &run.u})
-    for (const auto& v : *path) r.insert(r.end(), {v(0), v(1)});
+HimmelblauRunRecord to_record(const control::HimmelblauRun& run) {
+  HimmelblauRunRecord r;
+  r.cost = run.cost;
+  r.final_f = run.final_f;
+  r.ess_mean = run.ess_mean;
+  r.failed_minimizations = run.failed_minimizations;
+  r.last_noise_1 = run.last_noise(0);
+  r.last_noise_2 = run.last_noise(1);
+  r.max_laplace_gap = run.max_laplace_gap;
+  for (const auto& v : run.x) r.x.insert(r.x.end(), {v(0), v(1)});
+  for (const auto& v : run.u) r.u.insert(r.u.end(), {v(0), v(1)});
   return r;
 }
 
-control::HimmelblauRun from_record(const RunRecord& r) {
+control::HimmelblauRun from_record(const HimmelblauRunRecord& r) {
   control::HimmelblauRun run;
-  run.cost = r.at(0);
-  run.final_f = r.at(1);
-  run.ess_mean = r.at(2);
-  run.failed_minimizations = static_cast<int>(r.at(3));
-  run.last_noise = Vec<2>(r.at(4), r.at(5));
-  run.max_laplace_gap = r.at(6);
-  run.x.resize(static_cast<std::size_t>(r.at(7)));
-  run.u.resize(static_cast<std::size_t>(r.at(8)));
-  std::size_t at = 9;
-  for (auto* path : {&run.x, &run.u})
-    for (auto& v : *path) {
-      v = Vec<2>(r.at(at), r.at(at + 1));
-      at += 2;
-    }
+  run.cost = r.cost;
+  run.final_f = r.final_f;
+  run.ess_mean = r.ess_mean;
+  run.failed_minimizations = r.failed_minimizations;
+  run.last_noise = Vec<2>(r.last_noise_1, r.last_noise_2);
+  run.max_laplace_gap = r.max_laplace_gap;
+  for (std::size_t k = 0; k + 1 < r.x.size(); k += 2) run.x.emplace_back(r.x[k], r.x[k + 1]);
+  for (std::size_t k = 0; k + 1 < r.u.size(); k += 2) run.u.emplace_back(r.u[k], r.u[k + 1]);
   return run;
 }
 

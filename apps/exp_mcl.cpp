@@ -293,10 +293,6 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   implicit_proposal.map =
       s.map == "random" ? filter::ImplicitMap::kRandom : filter::ImplicitMap::kLinear;
 
-  std::vector<double> wall;
-  std::vector<double> err, rmse, hrmse, ess, cpu, used, dropped, newton, max_err, resamplings,
-      min_loglik, gated;
-  int lost = 0, fallbacks = 0, failures = 0;
   Progress bar(fmt::format("mcl {} M={}", s.method, s.particles), static_cast<std::size_t>(s.runs),
                ctx.show_progress());
   auto run_number = [&](std::size_t r) {
@@ -322,40 +318,45 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
             filter::localization_metrics(run, problem.truth, options.particles);
         const auto steps = static_cast<double>(run.steps.size());
         bar.tick();
-        return RunRecord{m.error_percent,
-                         m.rmse,
-                         m.heading_rmse,
-                         m.ess_fraction,
-                         1e3 * run.cpu_seconds / steps,
-                         1e3 * run.seconds / steps,
-                         static_cast<double>(m.detections_used),
-                         static_cast<double>(m.detections_dropped),
-                         static_cast<double>(m.newton_evaluations),
-                         m.max_error,
-                         static_cast<double>(run.resamplings),
-                         m.min_log_likelihood_increment,
-                         static_cast<double>(m.fallbacks),
-                         static_cast<double>(m.failures),
-                         static_cast<double>(m.gated)};
+        MclRunRecord rec;
+        rec.error_percent = m.error_percent;
+        rec.rmse_m = m.rmse;
+        rec.heading_rmse_rad = m.heading_rmse;
+        rec.ess_fraction = m.ess_fraction;
+        rec.cpu_ms_per_step = 1e3 * run.cpu_seconds / steps;
+        rec.wall_ms_per_step = 1e3 * run.seconds / steps;
+        rec.detections_used = m.detections_used;
+        rec.detections_dropped = m.detections_dropped;
+        rec.newton_evaluations = m.newton_evaluations;
+        rec.max_error_m = m.max_error;
+        rec.resamplings = run.resamplings;
+        rec.min_log_likelihood_increment = m.min_log_likelihood_increment;
+        rec.fallbacks = m.fallbacks;
+        rec.failures = m.failures;
+        rec.labelled_gated = m.gated;
+        return rec;
       });
   bar.finish();
-  for (const auto& v : records) {
-    err.push_back(v.at(0));
-    rmse.push_back(v.at(1));
-    if (std::isfinite(v.at(2))) hrmse.push_back(v.at(2));
-    ess.push_back(v.at(3));
-    cpu.push_back(v.at(4));
-    wall.push_back(v.at(5));
-    used.push_back(v.at(6));
-    dropped.push_back(v.at(7));
-    newton.push_back(v.at(8));
-    max_err.push_back(v.at(9));
-    resamplings.push_back(v.at(10));
-    min_loglik.push_back(v.at(11));
-    lost += v.at(9) > 5.0 ? 1 : 0;
-    fallbacks += static_cast<int>(v.at(12));
-    failures += static_cast<int>(v.at(13));
-    gated.push_back(v.at(14));
+  using R = MclRunRecord;
+  const std::vector<double> err = column(records, &R::error_percent),
+                            rmse = column(records, &R::rmse_m),
+                            ess = column(records, &R::ess_fraction),
+                            cpu = column(records, &R::cpu_ms_per_step),
+                            wall = column(records, &R::wall_ms_per_step),
+                            used = column(records, &R::detections_used),
+                            dropped = column(records, &R::detections_dropped),
+                            newton = column(records, &R::newton_evaluations),
+                            max_err = column(records, &R::max_error_m),
+                            resamplings = column(records, &R::resamplings),
+                            min_loglik = column(records, &R::min_log_likelihood_increment),
+                            gated = column(records, &R::labelled_gated);
+  std::vector<double> hrmse;  // the runs with a heading RMSE (truth with headings)
+  int lost = 0, fallbacks = 0, failures = 0;
+  for (const MclRunRecord& r : records) {
+    if (std::isfinite(r.heading_rmse_rad)) hrmse.push_back(r.heading_rmse_rad);
+    lost += r.max_error_m > 5.0 ? 1 : 0;
+    fallbacks += r.fallbacks;
+    failures += r.failures;
   }
   if (const double g = std::accumulate(gated.begin(), gated.end(), 0.0); g > 0)
     fmt::print(stderr,

@@ -185,15 +185,17 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
     const filter::GlobalMetrics m = filter::global_metrics(run, problem, from);
     bar.tick();
     const auto steps = static_cast<double>(run.steps.size());
-    return RunRecord{m.success ? 1.0 : 0.0,
-                     m.time_to_converge,
-                     m.rmse_after_settle,
-                     m.particles_mean,
-                     m.particles_peak,
-                     static_cast<double>(m.injected),
-                     1e3 * run.cpu_seconds / steps,
-                     from - t0,
-                     run.uniform_start ? 1.0 : 0.0};
+    MclGlobalRunRecord rec;
+    rec.success = m.success;
+    rec.time_to_converge_s = m.time_to_converge;
+    rec.rmse_after_settle_m = m.rmse_after_settle;
+    rec.particles_mean = m.particles_mean;
+    rec.particles_peak = m.particles_peak;
+    rec.injected = m.injected;
+    rec.cpu_ms_per_step = 1e3 * run.cpu_seconds / steps;
+    rec.start_s = from - t0;
+    rec.uniform_start = run.uniform_start;
+    return rec;
   });
   bar.finish();
   if (rank_index() == 0 && (!s.trajectory.empty() || !s.truth_trajectory.empty()))
@@ -203,12 +205,17 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
     write_errors(ctx.csv_path(fmt::format("mcl_{}_{}_M{}_errors.csv", kidnap ? "kidnap" : "global",
                                           s.method, s.particles)),
                  problem, t0, std::min<std::size_t>(runs, 5), run_number);
-  const std::vector<double> success = column(records, 0), converge = column(records, 1),
-                            rmse = column(records, 2), pmean = column(records, 3),
-                            ppeak = column(records, 4), injected = column(records, 5),
-                            cpu = column(records, 6), start = column(records, 7);
+  using R = MclGlobalRunRecord;
+  const std::vector<double> success = column(records, &R::success),
+                            converge = column(records, &R::time_to_converge_s),
+                            rmse = column(records, &R::rmse_after_settle_m),
+                            pmean = column(records, &R::particles_mean),
+                            ppeak = column(records, &R::particles_peak),
+                            injected = column(records, &R::injected),
+                            cpu = column(records, &R::cpu_ms_per_step),
+                            start = column(records, &R::start_s);
   int uniform_starts = 0;
-  for (double v : column(records, 8)) uniform_starts += v > 0 ? 1 : 0;
+  for (const R& r : records) uniform_starts += r.uniform_start ? 1 : 0;
   nlohmann::json j;
   j["method"] = s.method;
   j["init"] = s.init;

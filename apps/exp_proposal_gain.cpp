@@ -62,8 +62,9 @@ std::vector<GainPoint> make_points(const ProposalGainSettings& s) {
   return points;
 }
 
-/// Both proposals on one simulated log: {ess, rmse, cpu ms/step} of implicit, then of bootstrap.
-RunRecord gain_run(const GainPoint& pt, const ProposalGainSettings& s, std::uint64_t seed) {
+/// Both proposals on one simulated log.
+ProposalGainRunRecord gain_run(const GainPoint& pt, const ProposalGainSettings& s,
+                               std::uint64_t seed) {
   robot::UnicycleParams params;
   params.dt = pt.dt;
   const robot::UnicycleModel model(params);
@@ -77,23 +78,27 @@ RunRecord gain_run(const GainPoint& pt, const ProposalGainSettings& s, std::uint
   filter::FilterOptions fo;
   fo.particles = static_cast<std::size_t>(s.particles);
   fo.seed = seed;
-  RunRecord rec;
-  auto add = [&](const filter::LocalizationRun& run) {
+  ProposalGainRunRecord rec;
+  auto add = [&](const filter::LocalizationRun& run, double& ess, double& rmse, double& cpu) {
     const auto m = filter::localization_metrics(run, problem.truth, fo.particles);
-    rec.push_back(m.ess_fraction);
-    rec.push_back(m.rmse);
-    rec.push_back(1e3 * run.cpu_seconds / static_cast<double>(run.steps.size()));
+    ess = m.ess_fraction;
+    rmse = m.rmse;
+    cpu = 1e3 * run.cpu_seconds / static_cast<double>(run.steps.size());
   };
-  add(filter::run_localization(problem, model, sensor, filter::ImplicitProposal{}, fo));
-  add(filter::run_localization(problem, model, sensor, filter::BootstrapProposal{}, fo));
+  add(filter::run_localization(problem, model, sensor, filter::ImplicitProposal{}, fo),
+      rec.implicit_ess, rec.implicit_rmse_m, rec.implicit_cpu_ms_per_step);
+  add(filter::run_localization(problem, model, sensor, filter::BootstrapProposal{}, fo),
+      rec.standard_ess, rec.standard_rmse_m, rec.standard_cpu_ms_per_step);
   return rec;
 }
 
-/// Mean and standard error (sd / sqrt(n)) of column `k` of the records.
-std::pair<double, double> mean_se(const std::vector<RunRecord>& recs, std::size_t k,
-                                  std::size_t k_minus = SIZE_MAX) {
+using GainField = double ProposalGainRunRecord::*;
+
+/// Mean and standard error (sd / sqrt(n)) of field `k` of the records, less field `k_minus`.
+std::pair<double, double> mean_se(const std::vector<ProposalGainRunRecord>& recs, GainField k,
+                                  GainField k_minus = nullptr) {
   std::vector<double> v;
-  for (const auto& r : recs) v.push_back(r.at(k) - (k_minus == SIZE_MAX ? 0.0 : r.at(k_minus)));
+  for (const auto& r : recs) v.push_back(r.*k - (k_minus == nullptr ? 0.0 : r.*k_minus));
   const double n = static_cast<double>(v.size());
   const double m = std::accumulate(v.begin(), v.end(), 0.0) / n;
   double ss = 0.0;
@@ -124,25 +129,30 @@ double carpark_ratio(double p) {
   return std::sqrt(sum / static_cast<double>(n)) / range_sd;
 }
 
-nlohmann::json point_json(const GainPoint& pt, const std::vector<RunRecord>& recs) {
+nlohmann::json point_json(const GainPoint& pt, const std::vector<ProposalGainRunRecord>& recs) {
   nlohmann::json j{{"sweep", pt.sweep},
                    {"dt", pt.dt},
                    {"range_sd", pt.range_sd},
                    {"bearing_sd", pt.bearing_sd},
                    {"ratio", pt.ratio}};
+  using R = ProposalGainRunRecord;
   const char* names[] = {"ess", "rmse_m", "cpu_ms_per_step"};
-  for (int m = 0; m < 2; ++m) {
+  const GainField implicit[] = {&R::implicit_ess, &R::implicit_rmse_m,
+                                &R::implicit_cpu_ms_per_step};
+  const GainField standard[] = {&R::standard_ess, &R::standard_rmse_m,
+                                &R::standard_cpu_ms_per_step};
+  for (const auto* fields : {implicit, standard}) {
     nlohmann::json c;
     for (std::size_t k = 0; k < 3; ++k) {
-      const auto [mean, se] = mean_se(recs, 3 * m + k);
+      const auto [mean, se] = mean_se(recs, fields[k]);
       c[names[k]] = mean;
       c[std::string(names[k]) + "_se"] = se;
     }
-    j[m == 0 ? "implicit" : "standard"] = c;
+    j[fields == implicit ? "implicit" : "standard"] = c;
   }
   // Paired differences, implicit minus bootstrap, over the same logs and seeds.
   for (std::size_t k = 0; k < 3; ++k) {
-    const auto [mean, se] = mean_se(recs, k, k + 3);
+    const auto [mean, se] = mean_se(recs, implicit[k], standard[k]);
     j["diff"][names[k]] = mean;
     j["diff"][std::string(names[k]) + "_se"] = se;
   }
@@ -189,7 +199,7 @@ nlohmann::json run_proposal_gain(const ProposalGainSettings& s, const RunContext
   const auto records =
       distribute_runs(ctx, "proposal_gain", settings, points.size() * runs, [&](std::size_t i) {
         const std::uint64_t seed = ctx.seed * 1000003ull + static_cast<std::uint64_t>(i);
-        RunRecord r = gain_run(points[i / runs], s, seed);
+        const ProposalGainRunRecord r = gain_run(points[i / runs], s, seed);
         bar.tick();
         return r;
       });
@@ -203,7 +213,7 @@ nlohmann::json run_proposal_gain(const ProposalGainSettings& s, const RunContext
   j["threads"] = active_threads();
   j["points"] = nlohmann::json::array();
   for (std::size_t p = 0; p < points.size(); ++p) {
-    const std::vector<RunRecord> recs(
+    const std::vector<ProposalGainRunRecord> recs(
         records.begin() + static_cast<std::ptrdiff_t>(p * runs),
         records.begin() + static_cast<std::ptrdiff_t>((p + 1) * runs));
     j["points"].push_back(point_json(points[p], recs));

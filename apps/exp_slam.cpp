@@ -139,9 +139,8 @@ void write_slam_tum_files(const SlamSettings& s, const slam::SlamDataset& d,
   truth.write(s.truth_trajectory, "slam --truth-trajectory");
 }
 
-// What the summary needs of one run, as numbers that travel between ranks (parallel_runs.hpp).
-// Run 0 also carries its path and map, for the CSV files; with the consistent truth, every run
-// carries its NEES per step, for the band.
+// What the summary needs of one run. Run 0 also carries its path and map, for the CSV files; with
+// the consistent truth, every run carries its NEES per step, for the band.
 struct RunSummary {
   std::string name;
   std::size_t steps = 0;
@@ -149,79 +148,71 @@ struct RunSummary {
   slam::SlamRun run;  // stats, wall time, map bytes; path and map of run 0 only
 };
 
-RunRecord to_record(const slam::SlamDataset& d, const slam::SlamRun& run,
-                    const slam::SlamMetrics& m, bool with_nees, bool with_path) {
+SlamRunRecord to_record(const slam::SlamDataset& d, const slam::SlamRun& run,
+                        const slam::SlamMetrics& m, bool with_nees, bool with_path) {
   const auto& st = run.stats;
-  RunRecord r = {m.error_percent,
-                 m.error_aligned_percent,
-                 m.rmse_pose_m,
-                 m.rmse_pose_aligned_m,
-                 m.rmse_heading_rad,
-                 m.rmse_map_m,
-                 m.map_shape_m,
-                 m.nees_mean,
-                 static_cast<double>(m.landmarks),
-                 st.ess_fraction_sum,
-                 static_cast<double>(st.weighted_steps),
-                 static_cast<double>(st.resamplings),
-                 static_cast<double>(st.newton_iterations),
-                 static_cast<double>(st.newton_solves),
-                 static_cast<double>(st.skipped),
-                 static_cast<double>(run.map_bytes),
-                 run.wall_seconds,
-                 static_cast<double>(d.steps()),
-                 static_cast<double>(m.scored_steps)};
-  auto append = [&r](std::size_t count) { r.push_back(static_cast<double>(count)); };
-  append(d.name.size());
-  for (const char c : d.name) r.push_back(static_cast<double>(c));
+  SlamRunRecord r;
+  r.error_percent = m.error_percent;
+  r.error_aligned_percent = m.error_aligned_percent;
+  r.rmse_pose_m = m.rmse_pose_m;
+  r.rmse_pose_aligned_m = m.rmse_pose_aligned_m;
+  r.rmse_heading_rad = m.rmse_heading_rad;
+  r.rmse_map_m = m.rmse_map_m;
+  r.map_shape_m = m.map_shape_m;
+  r.nees_mean = m.nees_mean;
+  r.landmarks = m.landmarks;
+  r.ess_fraction_sum = st.ess_fraction_sum;
+  r.weighted_steps = st.weighted_steps;
+  r.resamplings = st.resamplings;
+  r.newton_iterations = st.newton_iterations;
+  r.newton_solves = st.newton_solves;
+  r.skipped = st.skipped;
+  r.map_bytes = run.map_bytes;
+  r.wall_seconds = run.wall_seconds;
+  r.steps = d.steps();
+  r.scored_steps = m.scored_steps;
+  r.name = d.name;
   // The NEES per step (one number per step and run) only where it is summarised.
-  append(with_nees ? m.nees.size() : 0);
-  if (with_nees) r.insert(r.end(), m.nees.begin(), m.nees.end());
-  append(with_path ? run.path.size() : 0);
-  if (with_path)
-    for (const auto& p : run.path) r.insert(r.end(), {p(0), p(1), p(2)});
-  append(with_path ? run.map.landmarks.size() : 0);
-  if (with_path)
+  if (with_nees) r.nees = m.nees;
+  if (with_path) {
+    for (const auto& p : run.path) r.path.insert(r.path.end(), {p(0), p(1), p(2)});
     for (std::size_t k = 0; k < run.map.landmarks.size(); ++k)
-      r.insert(r.end(), {static_cast<double>(run.map.ids[k]), run.map.landmarks[k](0),
-                         run.map.landmarks[k](1)});
+      r.map.insert(r.map.end(), {static_cast<double>(run.map.ids[k]), run.map.landmarks[k](0),
+                                 run.map.landmarks[k](1)});
+  }
   return r;
 }
 
-RunSummary from_record(const RunRecord& r) {
+RunSummary from_record(const SlamRunRecord& r) {
   RunSummary out;
   auto& m = out.metrics;
   auto& st = out.run.stats;
-  std::size_t at = 0;
-  auto next = [&] { return r.at(at++); };
-  auto count = [&] { return static_cast<std::size_t>(next()); };
-  for (double* v :
-       {&m.error_percent, &m.error_aligned_percent, &m.rmse_pose_m, &m.rmse_pose_aligned_m,
-        &m.rmse_heading_rad, &m.rmse_map_m, &m.map_shape_m, &m.nees_mean})
-    *v = next();
-  m.landmarks = count();
-  st.ess_fraction_sum = next();
-  st.weighted_steps = count();
-  st.resamplings = count();
-  st.newton_iterations = count();
-  st.newton_solves = count();
-  st.skipped = count();
-  out.run.map_bytes = count();
-  out.run.wall_seconds = next();
-  out.steps = count();
-  m.scored_steps = count();
-  out.name.resize(count());
-  for (auto& c : out.name) c = static_cast<char>(next());
-  m.nees.resize(count());
-  for (auto& v : m.nees) v = next();
-  out.run.path.resize(count());
-  for (auto& p : out.run.path)
-    for (int c = 0; c < 3; ++c) p(c) = next();  // in order (argument order is unspecified)
-  const std::size_t landmarks = count();
-  for (std::size_t k = 0; k < landmarks; ++k) {
-    out.run.map.ids.push_back(static_cast<int>(next()));
-    const double x = next();
-    out.run.map.landmarks.push_back(slam::Landmark(x, next()));
+  m.error_percent = r.error_percent;
+  m.error_aligned_percent = r.error_aligned_percent;
+  m.rmse_pose_m = r.rmse_pose_m;
+  m.rmse_pose_aligned_m = r.rmse_pose_aligned_m;
+  m.rmse_heading_rad = r.rmse_heading_rad;
+  m.rmse_map_m = r.rmse_map_m;
+  m.map_shape_m = r.map_shape_m;
+  m.nees_mean = r.nees_mean;
+  m.landmarks = r.landmarks;
+  st.ess_fraction_sum = r.ess_fraction_sum;
+  st.weighted_steps = r.weighted_steps;
+  st.resamplings = r.resamplings;
+  st.newton_iterations = r.newton_iterations;
+  st.newton_solves = r.newton_solves;
+  st.skipped = r.skipped;
+  out.run.map_bytes = r.map_bytes;
+  out.run.wall_seconds = r.wall_seconds;
+  out.steps = r.steps;
+  m.scored_steps = r.scored_steps;
+  out.name = r.name;
+  m.nees = r.nees;
+  for (std::size_t k = 0; k + 2 < r.path.size(); k += 3)
+    out.run.path.emplace_back(r.path[k], r.path[k + 1], r.path[k + 2]);
+  for (std::size_t k = 0; k + 2 < r.map.size(); k += 3) {
+    out.run.map.ids.push_back(static_cast<int>(r.map[k]));
+    out.run.map.landmarks.push_back(slam::Landmark(r.map[k + 1], r.map[k + 2]));
   }
   return out;
 }

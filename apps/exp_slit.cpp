@@ -98,25 +98,14 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
   {
     Progress progress(fmt::format("slit {} M={}", s.mode, s.samples),
                       static_cast<std::size_t>(s.runs), ctx.show_progress());
-    const auto records = distribute_runs(
+    auto rows = distribute_runs(
         ctx, "slit",
         fmt::format("seed={} M={} mode={} estimator={}", ctx.seed, s.samples, s.mode, s.estimator),
         static_cast<std::size_t>(s.runs), [&](std::size_t r) {
-          const auto row = slit_table_row(slit, opt, r);
+          SlitTableRow row = slit_table_row(slit, opt, r);
           progress.tick();
-          return RunRecord{row.error_x,
-                           row.error_u,
-                           row.crashed_exact ? 1.0 : 0.0,
-                           row.crashed_estimate ? 1.0 : 0.0,
-                           static_cast<double>(row.fallbacks),
-                           row.ess_mean};
+          return row;
         });
-    std::vector<SlitTableRow> rows(records.size());
-    for (std::size_t r = 0; r < rows.size(); ++r) {
-      const auto& v = records[r];
-      rows[r] = {v.at(0), v.at(1), v.at(2) != 0.0, v.at(3) != 0.0, static_cast<int>(v.at(4)),
-                 v.at(5)};
-    }
     table = summarise_slit_table(std::move(rows));
     progress.finish();
   }

@@ -3,6 +3,8 @@
 // files into ctx.out_dir (when set) and returns one JSON object with the keys documented in
 // docs/cli.md. The subcommands (apps/cmd_*.cpp) and `implicit reproduce` both call these.
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -11,6 +13,7 @@
 
 #include "context.hpp"
 #include "implicit/robot/landmark_observation.hpp"
+#include "run_record.hpp"
 
 namespace implicit::app {
 
@@ -45,6 +48,28 @@ struct HimmelblauSettings {
   int runs = 70;
   int samples = 50;
 };
+/// One closed-loop run of run_himmelblau, as it travels between ranks (control::HimmelblauRun).
+struct HimmelblauRunRecord {
+  double cost = 0.0, final_f = 0.0, ess_mean = 0.0;
+  int failed_minimizations = 0;
+  double last_noise_1 = 0.0, last_noise_2 = 0.0;  ///< W_{K-1}
+  double max_laplace_gap = 0.0;
+  std::vector<double> x, u;  ///< the states and the controls, two numbers each
+  static constexpr auto fields() {
+    using R = HimmelblauRunRecord;
+    using F = RecordField<R>;
+    return std::array{F{"cost", &R::cost},
+                      F{"final_f", &R::final_f},
+                      F{"ess_mean", &R::ess_mean},
+                      F{"failed_minimizations", &R::failed_minimizations},
+                      F{"last_noise_1", &R::last_noise_1},
+                      F{"last_noise_2", &R::last_noise_2},
+                      F{"max_laplace_gap", &R::max_laplace_gap},
+                      F{"x", &R::x},
+                      F{"u", &R::u}};
+  }
+};
+
 /// Keys: runs, samples, runs_below_10, mean_cost, mean_final_f, newton_final_f, seconds.
 /// CSV: table4_himmelblau.csv, figure5_*.csv.
 nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx);
@@ -95,6 +120,63 @@ struct MclSettings {
   /// being an error.
   bool allow_empty = false;
 };
+/// One run of run_mcl (known start).
+struct MclRunRecord {
+  double error_percent = 0.0, rmse_m = 0.0, heading_rmse_rad = 0.0, ess_fraction = 0.0;
+  double cpu_ms_per_step = 0.0, wall_ms_per_step = 0.0;
+  double detections_used = 0.0, detections_dropped = 0.0;  ///< per-particle means, summed
+  double newton_evaluations = 0.0;                         ///< per particle and update
+  double max_error_m = 0.0;
+  int resamplings = 0;
+  double min_log_likelihood_increment = 0.0;
+  int fallbacks = 0, failures = 0;
+  int labelled_gated = 0;  ///< labelled detections left out by the prediction gate
+  static constexpr auto fields() {
+    using R = MclRunRecord;
+    using F = RecordField<R>;
+    return std::array{F{"error_percent", &R::error_percent},
+                      F{"rmse_m", &R::rmse_m},
+                      F{"heading_rmse_rad", &R::heading_rmse_rad},
+                      F{"ess_fraction", &R::ess_fraction},
+                      F{"cpu_ms_per_step", &R::cpu_ms_per_step},
+                      F{"wall_ms_per_step", &R::wall_ms_per_step},
+                      F{"detections_used", &R::detections_used},
+                      F{"detections_dropped", &R::detections_dropped},
+                      F{"newton_evaluations", &R::newton_evaluations},
+                      F{"max_error_m", &R::max_error_m},
+                      F{"resamplings", &R::resamplings},
+                      F{"min_log_likelihood_increment", &R::min_log_likelihood_increment},
+                      F{"fallbacks", &R::fallbacks},
+                      F{"failures", &R::failures},
+                      F{"labelled_gated", &R::labelled_gated}};
+  }
+};
+
+/// One run of a global start or a kidnapping (run_mcl with --init global or --kidnap-at).
+struct MclGlobalRunRecord {
+  bool success = false;
+  double time_to_converge_s = 0.0;  ///< NaN: never converged
+  double rmse_after_settle_m = 0.0;
+  double particles_mean = 0.0, particles_peak = 0.0;
+  int injected = 0;  ///< particles drawn by recovery
+  double cpu_ms_per_step = 0.0;
+  double start_s = 0.0;  ///< from the log's first control
+  bool uniform_start = false;
+  static constexpr auto fields() {
+    using R = MclGlobalRunRecord;
+    using F = RecordField<R>;
+    return std::array{F{"success", &R::success},
+                      F{"time_to_converge_s", &R::time_to_converge_s},
+                      F{"rmse_after_settle_m", &R::rmse_after_settle_m},
+                      F{"particles_mean", &R::particles_mean},
+                      F{"particles_peak", &R::particles_peak},
+                      F{"injected", &R::injected},
+                      F{"cpu_ms_per_step", &R::cpu_ms_per_step},
+                      F{"start_s", &R::start_s},
+                      F{"uniform_start", &R::uniform_start}};
+  }
+};
+
 /// Keys: method, particles, runs, config, error_percent_mean/std/median, rmse_m,
 /// heading_rmse_rad, ess_mean, cpu_ms_per_step, detections_used, detections_dropped, lost_runs,
 /// seconds. CSV: mcl_<method>_M<particles>_trajectory.csv.
@@ -126,6 +208,52 @@ struct SlamSettings {
   std::string trajectory;             ///< TUM file of run 0's path (empty: none)
   std::string truth_trajectory;       ///< TUM file of data set 0's truth, where known
 };
+/// One data set's run of run_slam: its metrics and the filter's statistics; the path and map only
+/// for run 0 (the CSV files), the NEES per step only with the consistent truth (the band).
+struct SlamRunRecord {
+  double error_percent = 0.0, error_aligned_percent = 0.0;
+  double rmse_pose_m = 0.0, rmse_pose_aligned_m = 0.0, rmse_heading_rad = 0.0;
+  double rmse_map_m = 0.0, map_shape_m = 0.0, nees_mean = 0.0;
+  std::size_t landmarks = 0;
+  double ess_fraction_sum = 0.0;
+  std::size_t weighted_steps = 0, resamplings = 0, newton_iterations = 0, newton_solves = 0;
+  std::size_t skipped = 0;  ///< detections below min_range
+  std::size_t map_bytes = 0;
+  double wall_seconds = 0.0;
+  std::size_t steps = 0, scored_steps = 0;
+  std::string name;          ///< the data set's
+  std::vector<double> nees;  ///< per step
+  std::vector<double> path;  ///< x, y, heading per pose
+  std::vector<double> map;   ///< id, x, y per landmark
+  static constexpr auto fields() {
+    using R = SlamRunRecord;
+    using F = RecordField<R>;
+    return std::array{F{"error_percent", &R::error_percent},
+                      F{"error_aligned_percent", &R::error_aligned_percent},
+                      F{"rmse_pose_m", &R::rmse_pose_m},
+                      F{"rmse_pose_aligned_m", &R::rmse_pose_aligned_m},
+                      F{"rmse_heading_rad", &R::rmse_heading_rad},
+                      F{"rmse_map_m", &R::rmse_map_m},
+                      F{"map_shape_m", &R::map_shape_m},
+                      F{"nees_mean", &R::nees_mean},
+                      F{"landmarks", &R::landmarks},
+                      F{"ess_fraction_sum", &R::ess_fraction_sum},
+                      F{"weighted_steps", &R::weighted_steps},
+                      F{"resamplings", &R::resamplings},
+                      F{"newton_iterations", &R::newton_iterations},
+                      F{"newton_solves", &R::newton_solves},
+                      F{"skipped", &R::skipped},
+                      F{"map_bytes", &R::map_bytes},
+                      F{"wall_seconds", &R::wall_seconds},
+                      F{"steps", &R::steps},
+                      F{"scored_steps", &R::scored_steps},
+                      F{"name", &R::name},
+                      F{"nees", &R::nees},
+                      F{"path", &R::path},
+                      F{"map", &R::map}};
+  }
+};
+
 /// Keys: method, particles, datasets, error_percent_mean/std, error_aligned_percent_mean,
 /// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_pose_aligned_m, rmse_map_m, nees_mean
 /// (consistent mode), cpu_ms_per_step, peak_memory_mb, seconds. CSV:
@@ -142,6 +270,22 @@ struct ProposalGainSettings {
   std::vector<double> dts = {0.02, 0.05, 0.1, 0.2, 0.4};  ///< [s] step lengths of the dt sweep
   double dt_range_sd = 0.02;                              ///< [m] range sd of the dt sweep
 };
+/// One simulated log of run_proposal_gain, both proposals on it.
+struct ProposalGainRunRecord {
+  double implicit_ess = 0.0, implicit_rmse_m = 0.0, implicit_cpu_ms_per_step = 0.0;
+  double standard_ess = 0.0, standard_rmse_m = 0.0, standard_cpu_ms_per_step = 0.0;
+  static constexpr auto fields() {
+    using R = ProposalGainRunRecord;
+    using F = RecordField<R>;
+    return std::array{F{"implicit_ess", &R::implicit_ess},
+                      F{"implicit_rmse_m", &R::implicit_rmse_m},
+                      F{"implicit_cpu_ms_per_step", &R::implicit_cpu_ms_per_step},
+                      F{"standard_ess", &R::standard_ess},
+                      F{"standard_rmse_m", &R::standard_rmse_m},
+                      F{"standard_cpu_ms_per_step", &R::standard_cpu_ms_per_step}};
+  }
+};
+
 /// Keys: particles, runs, duration_s, scan_period_s, seed, threads, points (each: sweep, dt,
 /// range_sd, bearing_sd, ratio, implicit/standard/diff with ess, rmse_m, cpu_ms_per_step and
 /// their _se), carpark_ratio {A, B}, seconds. CSV: proposal_gain.csv.

@@ -1,4 +1,4 @@
-// distribute_runs() and RankSession (apps/parallel_runs.hpp).
+// distribute_run_values() (under distribute_runs) and RankSession (apps/parallel_runs.hpp).
 #include "parallel_runs.hpp"
 
 #include <fcntl.h>
@@ -36,7 +36,7 @@ struct Outcome {
   bool done = false;
   bool failed = false;
   bool invalid = false;  ///< failed with InvalidArgument (the data or settings, not the machine)
-  RunRecord record;
+  RecordValues record;
   std::string error;
 };
 
@@ -100,7 +100,7 @@ fs::path record_path(const fs::path& folder, std::size_t index) {
 }
 
 void write_record(const fs::path& folder, const std::string& key, std::size_t index,
-                  const RunRecord& r) {
+                  const RecordValues& r) {
   // Written whole, then renamed (OutputFile): a run interrupted while writing leaves no record.
   try {
     OutputFile out(record_path(folder, index), OutputFile::Mode::kRecord);
@@ -111,16 +111,21 @@ void write_record(const fs::path& folder, const std::string& key, std::size_t in
   }
 }
 
-// A missing record: false. A damaged one (a 0-byte file after a full disk, an edited one): false
-// and a warning on stderr naming the file and why, since its run is then computed again.
-bool read_record(const fs::path& folder, const std::string& key, std::size_t index, RunRecord& r) {
+using Check = std::function<std::string(const RecordValues&)>;
+
+// A missing record: false. A damaged one (a 0-byte file after a full disk, an edited one, numbers
+// that are not the experiment's record): false and a warning on stderr naming the file and why,
+// since its run is then computed again.
+bool read_record(const fs::path& folder, const std::string& key, std::size_t index,
+                 const Check& check, RecordValues& r) {
   const fs::path file = record_path(folder, index);
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) return false;
   std::ifstream is(file, std::ios::binary);
   std::ostringstream text;
   text << is.rdbuf();
-  const std::string why = is ? parse_run_record(text.str(), key, r) : "got an unreadable file";
+  std::string why = is ? parse_run_record(text.str(), key, r) : "got an unreadable file";
+  if (why.empty()) why = check(r);
   if (why.empty()) return true;
   fmt::print(stderr, "implicit: --resume: {}: {}; ignored, run {} is computed again\n",
              file.string(), why, index);
@@ -160,7 +165,7 @@ std::string without_rank(const std::string& error) {
 }
 
 // Called on TBB's threads: no MPI here (the ranks are started with MPI_THREAD_FUNNELED).
-void run_one(std::size_t i, const std::function<RunRecord(std::size_t)>& run,
+void run_one(std::size_t i, const std::function<RecordValues(std::size_t)>& run,
              std::vector<Outcome>& outcomes, const fs::path& folder, const std::string& key,
              const std::string& where) {
   Outcome& o = outcomes[i];
@@ -185,8 +190,9 @@ void run_one(std::size_t i, const std::function<RunRecord(std::size_t)>& run,
 }
 
 // Computes this rank's share of the runs not yet done, with TBB inside the rank.
-void compute_share(std::vector<Outcome>& outcomes, const std::function<RunRecord(std::size_t)>& run,
-                   const fs::path& folder, const std::string& key) {
+void compute_share(std::vector<Outcome>& outcomes,
+                   const std::function<RecordValues(std::size_t)>& run, const fs::path& folder,
+                   const std::string& key) {
   std::vector<std::size_t> todo;
   for (std::size_t i = 0; i < outcomes.size(); ++i)
     if (!outcomes[i].done) todo.push_back(i);
@@ -219,9 +225,11 @@ void compute_share(std::vector<Outcome>& outcomes, const std::function<RunRecord
 
 }  // namespace
 
-std::vector<RunRecord> distribute_runs(const RunContext& ctx, const std::string& experiment,
-                                       const std::string& settings, std::size_t n,
-                                       const std::function<RunRecord(std::size_t)>& run) {
+std::vector<RecordValues> distribute_run_values(const RunContext& ctx,
+                                                const std::string& experiment,
+                                                const std::string& settings, std::size_t n,
+                                                const std::function<RecordValues(std::size_t)>& run,
+                                                const Check& check) {
   // A record is reused only by the same build: another commit may compute other numbers.
   const std::string key =
       fmt::format("{} {} runs={} commit={} format=1", experiment, settings, n, git_commit());
@@ -242,7 +250,7 @@ std::vector<RunRecord> distribute_runs(const RunContext& ctx, const std::string&
     if (transport::rank() == 0)
       for (std::size_t i = 0; i < n; ++i) {
         Outcome o;
-        if (read_record(folder, key, i, o.record)) pack(found, i, o);
+        if (read_record(folder, key, i, check, o.record)) pack(found, i, o);
       }
     unpack(transport::broadcast(found), outcomes);
   }
@@ -254,7 +262,7 @@ std::vector<RunRecord> distribute_runs(const RunContext& ctx, const std::string&
     if (computed[i].done && !outcomes[i].done) pack(mine, i, computed[i]);
   unpack(transport::all_gather(mine), outcomes);
 
-  std::vector<RunRecord> records(n);
+  std::vector<RecordValues> records(n);
   std::string failures;
   std::size_t failed = 0;
   for (std::size_t i = 0; i < n; ++i) {

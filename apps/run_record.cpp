@@ -9,13 +9,13 @@
 
 namespace implicit::app {
 
-std::string format_run_record(const std::string& key, const RunRecord& r) {
+std::string format_run_record(const std::string& key, const RecordValues& r) {
   std::string text = key + "\n" + fmt::format("{}\n", r.size());
   for (const double v : r) text += fmt::format("{:a}\n", v);
   return text;
 }
 
-std::string parse_run_record(const std::string& text, const std::string& key, RunRecord& r) {
+std::string parse_run_record(const std::string& text, const std::string& key, RecordValues& r) {
   if (text.empty()) return "got an empty file";
   std::istringstream in(text);
   std::string line;

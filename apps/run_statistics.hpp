@@ -1,12 +1,12 @@
 #pragma once
-// Summaries over the runs of an experiment: mean, sample standard deviation, median, and one
-// column of the distributed records (parallel_runs.hpp).
+// Summaries over the runs of an experiment: mean, sample standard deviation, median (a field of
+// every record: column() in run_record.hpp).
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <vector>
 
-#include "parallel_runs.hpp"
+#include "run_record.hpp"
 
 namespace implicit::app {
 
@@ -34,14 +34,6 @@ inline double median_of(std::vector<double> v) {
 inline double median_of_finite(std::vector<double> v) {
   v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
   return v.empty() ? std::nan("") : median_of(std::move(v));
-}
-
-/// Entry i of every record, in run order.
-inline std::vector<double> column(const std::vector<RunRecord>& records, std::size_t i) {
-  std::vector<double> c;
-  c.reserve(records.size());
-  for (const RunRecord& r : records) c.push_back(r.at(i));
-  return c;
 }
 
 }  // namespace implicit::app

@@ -14,12 +14,14 @@
 // (exp_slit.cpp) spreads the same rows over MPI ranks too (parallel_runs.hpp) and summarises
 // them with the same function, so both give the same table.
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
 #include "implicit/control/double_slit.hpp"
 #include "implicit/control/double_slit_problem.hpp"
 #include "implicit/control/path_integral.hpp"
+#include "run_record.hpp"
 
 namespace implicit::app {
 
@@ -52,11 +54,22 @@ struct SlitTableOptions {
   control::SlitSampling sampling = control::SlitSampling::kWall;  ///< of kWallSpace
 };
 
+/// One run of the table (a named record: it travels between ranks, run_record.hpp).
 struct SlitTableRow {
   double error_x = 0.0, error_u = 0.0;  ///< relative errors (fractions, not %)
   bool crashed_exact = false, crashed_estimate = false;
   int fallbacks = 0;
   double ess_mean = 0.0;
+  static constexpr auto fields() {
+    using R = SlitTableRow;
+    using F = RecordField<R>;
+    return std::array{F{"error_x", &R::error_x},
+                      F{"error_u", &R::error_u},
+                      F{"crashed_exact", &R::crashed_exact},
+                      F{"crashed_estimate", &R::crashed_estimate},
+                      F{"fallbacks", &R::fallbacks},
+                      F{"ess_mean", &R::ess_mean}};
+  }
 };
 
 struct SlitTable {
