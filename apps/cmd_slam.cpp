@@ -132,10 +132,7 @@ void setup_slam(CLI::App& sub) {
                      "data/victoria_park/victoria_park.log.gz --datasets 1 --json",
                      "implicit slam --sensor laser --data data/carmen/intel-corrected.log.gz "
                      "--method implicit -M 8 --datasets 3 --map-out out/intel.yaml --json"});
-  CLI::Option* alphas = sub.get_option("--alphas");
-  CLI::Option* max_scans = sub.get_option("--max-scans");
-  CLI::Option* map_out = sub.get_option("--map-out");
-  sub.callback([cmd, alphas, max_scans, map_out] {
+  sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     if (cmd->grid.sensor == "laser") {
       run_grid_slam_command(cmd->settings, cmd->grid, cmd->ctx);
@@ -145,7 +142,7 @@ void setup_slam(CLI::App& sub) {
       throw CLI::ValidationError(
           "--method",
           fmt::format("{} is a grid-SLAM proposal; it needs --sensor laser", cmd->settings.method));
-    for (const CLI::Option* o : {alphas, max_scans, map_out})
+    for (const CLI::Option* o : cmd->grid.laser_only)
       if (o->count() > 0)
         throw CLI::ValidationError(o->get_name(), "applies to grid SLAM (--sensor laser)");
     const auto r = run_slam(cmd->settings, cmd->ctx);

@@ -19,6 +19,8 @@
 #include "experiments/grid_slam.hpp"
 #include "implicit/robot/carmen.hpp"
 #include "implicit/robot/map_io.hpp"
+#include "implicit/robot/odometry_model.hpp"
+#include "implicit/robot/pose_graph.hpp"
 #include "implicit/slam/grid/grid_slam_run.hpp"
 #include "tum_output.hpp"
 
@@ -40,17 +42,24 @@ void add_grid_slam_options(CLI::App& sub, GridSlamCommand& g) {
                  "SLAM on a CARMEN laser log (--method bootstrap, gmapping or implicit)")
       ->check(CLI::IsMember({"landmark", "laser"}))
       ->capture_default_str();
-  sub.add_option("--alphas", g.alphas,
-                 "laser: alpha1..alpha4 of the odometry synthesised from the log's corrected "
-                 "poses and of the filter's motion model (default 0.002 each)")
-      ->expected(4)
-      ->check(in_range(0.0, 10.0));
-  sub.add_option("--max-scans", g.max_scans, "laser: use the first N scans of the log (0: all)")
-      ->check(in_range(0, 100000000));
-  sub.add_option("--map-out", g.map_out,
-                 "laser: write the first run's map (its best particle's) as map_server files "
-                 "(FILE.yaml and its .pgm)")
-      ->check(tum_file_validator());
+  g.laser_only = {
+      sub.add_option("--alphas", g.alphas,
+                     "laser: alpha1..alpha4 of the odometry synthesised from the log's corrected "
+                     "poses and of the filter's motion model (default 0.002 each)")
+          ->expected(4)
+          ->check(in_range(0.0, 10.0)),
+      sub.add_option("--max-scans", g.max_scans, "laser: use the first N scans of the log (0: all)")
+          ->check(in_range(0, 100000000)),
+      sub.add_option("--map-out", g.map_out,
+                     "laser: write the first run's map (its best particle's) as map_server files "
+                     "(FILE.yaml and its .pgm)")
+          ->check(tum_file_validator()),
+      sub.add_option("--g2o", g.g2o,
+                     "laser: write the first run's pose graph as a g2o file (its trajectory as "
+                     "VERTEX_SE2, the odometry between consecutive scans as EDGE_SE2 with the "
+                     "information of the filter's motion noise), for post-optimisation")
+          ->check(tum_file_validator()),
+  };
 }
 
 namespace {
@@ -108,6 +117,13 @@ void write_grid_slam_tum(const std::string& file, std::string_view flag,
   track.write(file, flag);
 }
 
+/// The poses of a trajectory, without their times (a pose graph's vertices).
+std::vector<robot::Pose> grid_slam_poses(const std::vector<slam::GridSlamPose>& trajectory) {
+  std::vector<robot::Pose> poses;
+  for (const auto& p : trajectory) poses.push_back(p.pose);
+  return poses;
+}
+
 }  // namespace
 
 void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
@@ -152,6 +168,12 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
   if (!shared.truth_trajectory.empty())
     write_grid_slam_tum(shared.truth_trajectory, "slam --truth-trajectory", first.reference);
   if (!g.map_out.empty()) robot::save_map(first.map, g.map_out);
+  if (!g.g2o.empty())
+    robot::write_g2o(
+        g.g2o,
+        robot::odometry_pose_graph(grid_slam_poses(first.trajectory), first.odometry,
+                                   robot::OdometryModel(o.filter.alphas, o.filter.floor_std)),
+        "slam --g2o");
   nlohmann::json j = experiments::to_json(r);
   j["data"] = shared.data_dir;  // as given on the command line
   if (ctx.json) {

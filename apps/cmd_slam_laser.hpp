@@ -21,6 +21,9 @@ struct GridSlamCommand {
   std::vector<double> alphas;       ///< the odometry noise (empty: the runner's)
   int max_scans = 0;                ///< 0: every scan
   std::string map_out;              ///< the first run's map as map_server YAML + PGM
+  std::string g2o;                  ///< the first run's pose graph as a g2o file
+  /// The grid-SLAM options, refused with --sensor landmark (add_grid_slam_options fills it).
+  std::vector<CLI::Option*> laser_only;
   /// The landmark options, refused with --sensor laser (they would be silently ignored).
   std::vector<CLI::Option*> landmark_only;
   CLI::Option *particles = nullptr, *datasets = nullptr;

@@ -77,6 +77,7 @@
 #include "implicit/robot/observation_model.hpp"
 #include "implicit/robot/occupancy_grid.hpp"
 #include "implicit/robot/odometry_model.hpp"
+#include "implicit/robot/pose_graph.hpp"
 #include "implicit/robot/range_bearing.hpp"
 #include "implicit/robot/scan_simulation.hpp"
 #include "implicit/robot/simulate.hpp"

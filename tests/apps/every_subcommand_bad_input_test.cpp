@@ -103,6 +103,9 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
         {"slam --sensor laser --alphas 0.1 -1 0.1 0.1", 2, {"--alphas"}},
         {"slam --sensor laser --max-scans x", 2, {"--max-scans"}},
         {"slam --sensor laser --map-out ''", 2, {"--map-out"}},
+        {"slam --sensor laser --g2o ''", 2, {"--g2o"}},
+        {"slam --sensor laser --g2o DIR/gone/g.g2o", 2, {"--g2o", "gone"}},
+        {"slam --g2o DIR/g.g2o", 2, {"--g2o", "--sensor laser"}},
         {"slam --sensor laser --data DIR/gone.log.gz", 1, {"gone.log.gz"}}}},
       {"slit", {{"slit --runs 0", 2, {"--runs"}}, {"slit --mode nope", 2, {"--mode", "nope"}}}},
   };

@@ -154,6 +154,7 @@ TEST(GridSlamCli, FlagsOfTheOtherSensorAndMissingDataAreRefused) {
       {"slam --method bootstrap", 2, "--sensor laser"},
       {"slam --alphas 0.1 0.1 0.1 0.1", 2, "--alphas"},
       {"slam --max-scans 10", 2, "--max-scans"},
+      {"slam --g2o run.g2o", 2, "--g2o"},
       {"slam --sensor laser --alphas 0.1 0.1 --data " + aces, 2, "--alphas"},
       {"slam --sensor laser --alphas 0.1 nan 0.1 0.1 --data " + aces, 2, "--alphas"},
       {"slam --sensor laser --max-scans -1 --data " + aces, 2, "--max-scans"},

@@ -5,6 +5,7 @@
 #include <ctime>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/rng.hpp"
@@ -181,6 +182,7 @@ GridSlamRun run_grid_slam(const robot::CarmenLog& log, const GridSlamRunOptions&
   run.ate_m = aligned_rmse(poses, run.reference);
   run.odometry_ate_m = aligned_rmse(odometry, run.reference);
   if (options.score_map) score_maps(log, used, odometry, options, run);
+  run.odometry = std::move(odometry);
   return run;
 }
 

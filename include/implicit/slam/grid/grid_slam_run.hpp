@@ -63,7 +63,10 @@ struct GridSlamRunOptions {
 struct GridSlamRun {
   std::vector<GridSlamPose> trajectory;  ///< the best particle's, at the processed scans
   std::vector<GridSlamPose> reference;   ///< the corrected poses at the same scans
-  robot::OccupancyGrid map;              ///< the best particle's map
+  /// The odometry the filter was given at the same scans (its motion input): the increments of
+  /// the pose graph (robot/pose_graph.hpp).
+  std::vector<robot::Pose> odometry;
+  robot::OccupancyGrid map;  ///< the best particle's map
   /// Kümmerle et al.'s relation metric over consecutive processed scans, the reference's
   /// relative motions as the relations.
   robot::RelationErrors relations;
