@@ -2,7 +2,12 @@
 // package defines them) and against measured relative motions (the relation metric of Kümmerle
 // et al. 2009). The definitions live in implicit/robot/trajectory_metrics.hpp; this file reads the
 // flags and files and prints.
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -16,6 +21,7 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/output_file.hpp"
 #include "implicit/core/parallel.hpp"
+#include "implicit/core/share_dir.hpp"
 #include "implicit/robot/trajectory.hpp"
 #include "implicit/robot/trajectory_metrics.hpp"
 #include "registry.hpp"
@@ -32,6 +38,7 @@ struct EvalCommand {
   bool all_pairs = false;
   double max_diff = 0.01;  ///< [s]
   double offset = 0.0;     ///< [s]
+  std::string plot;        ///< the figure (.png, .pdf or .svg); empty: none
   RunContext ctx;
 };
 
@@ -100,11 +107,105 @@ void eval_write_csv(const RunContext& ctx, const std::string& name, const std::s
   out.commit();
 }
 
+// ---- --plot: python/plots/eval_plot.py draws what this command computed ------------------------
+
+/// The check of --plot, before any work: a name ending in .png, .pdf or .svg (matplotlib writes
+/// the format the name says) in a folder that exists.
+CLI::Validator eval_plot_validator() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        if (text.empty()) return "expected a file name, got an empty one";
+        const std::filesystem::path file(text);
+        const std::string ext = file.extension().string();
+        if (ext != ".png" && ext != ".pdf" && ext != ".svg")
+          return "expected a name ending in .png, .pdf or .svg, got '" + text + "'";
+        std::error_code ec;
+        if (!file.parent_path().empty() && !std::filesystem::is_directory(file.parent_path(), ec))
+          return "expected a file in an existing folder, got '" + text + "' (no folder '" +
+                 file.parent_path().string() + "')";
+        return {};
+      },
+      "FILE.png|.pdf|.svg");
+}
+
+/// The plot's data, one row per pose pair: the reference position, the aligned estimate, the APE
+/// translation error and the distance along the reference (eval_plot.py's columns).
+std::string eval_plot_csv(const robot::PosePairs& pairs, const robot::Alignment& alignment,
+                          const robot::TrajectoryErrors& ape) {
+  std::string out = "t_s,ref_x_m,ref_y_m,est_x_m,est_y_m,ape_translation_m,path_m\n";
+  double path = 0.0;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    if (k > 0) path += (pairs.ref[k].translation - pairs.ref[k - 1].translation).norm();
+    const Vec<3> e = alignment.apply(pairs.est[k]).translation;
+    out += fmt::format("{},{},{},{},{},{},{}\n", pairs.times[k], pairs.ref[k].translation(0),
+                       pairs.ref[k].translation(1), e(0), e(1), ape.translation[k], path);
+  }
+  return out;
+}
+
+/// The last `lines` lines of a file (a script's messages), joined by " | ".
+std::string eval_plot_tail(const std::filesystem::path& file, std::size_t lines) {
+  std::ifstream in(file);
+  std::vector<std::string> all;
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty()) all.push_back(line);
+  std::string out;
+  for (std::size_t k = all.size() > lines ? all.size() - lines : 0; k < all.size(); ++k)
+    out += (out.empty() ? "" : " | ") + all[k];
+  return out;
+}
+
+/// Draws the figure into `file` through the plot script ($IMPLICIT_PYTHON, else /usr/bin/python3,
+/// as `implicit reproduce` runs its figures): the script writes a temporary name beside `file`,
+/// renamed over it when it succeeded, so a failed or stopped script leaves no half-drawn figure.
+/// Throws InvalidArgument naming --plot and the script's last words when it fails (exit 1).
+void eval_draw_plot(const std::string& file, const std::string& csv, const std::string& title) {
+  const std::filesystem::path script =
+      eval_naming("--plot", [] { return find_share_dir("plots", "IMPLICIT_PLOTS_DIR"); }) /
+      "eval_plot.py";
+  require(std::filesystem::exists(script), "eval --plot {}: plot script {} not found", file,
+          script.string());
+  const char* python_env = std::getenv("IMPLICIT_PYTHON");
+  const std::string python = python_env && *python_env ? python_env : "/usr/bin/python3";
+  const std::filesystem::path target(file);
+  const std::filesystem::path work =
+      std::filesystem::temp_directory_path() / fmt::format("implicit_eval_plot_{}", ::getpid());
+  std::filesystem::create_directories(work);
+  struct RemoveWork {
+    std::filesystem::path dir;
+    ~RemoveWork() {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    }
+  } remove_work{work};
+  const std::filesystem::path data = work / "eval_plot.csv", log = work / "eval_plot.log";
+  std::ofstream(data) << csv;
+  std::filesystem::path partial = target;
+  partial.replace_extension(fmt::format("tmp{}{}", ::getpid(), target.extension().string()));
+  const UnfinishedOutput drawing(partial);
+  setenv("MPLBACKEND", "Agg", 0);  // no display needed
+  const int code =
+      run_child_process({python, script.string(), data.string(), partial.string(), title}, log);
+  std::error_code ec;
+  if (code == 0 && std::filesystem::exists(partial)) {
+    std::filesystem::rename(partial, target, ec);
+    require(!ec, "eval --plot {}: expected a writable file, got {}", file, ec.message());
+    return;
+  }
+  std::filesystem::remove(partial, ec);
+  throw InvalidArgument(
+      fmt::format("eval --plot {}: {} exited with code {}{}: {}", file, script.filename().string(),
+                  code, code == 3 ? " (matplotlib missing)" : "", eval_plot_tail(log, 3)));
+}
+
 void run_eval(const EvalCommand& c) {
   if (c.ref.empty() && c.relations.empty())
     throw CLI::ValidationError("--ref", "expected --ref FILE (or --relations FILE), got neither");
   if (c.ref.empty() && c.align != "none")
     throw CLI::ValidationError("--align", "expected --ref FILE to align with, got none");
+  if (c.ref.empty() && !c.plot.empty())
+    throw CLI::ValidationError("--plot",
+                               "expected --ref FILE to draw the estimate against, got none");
   if (c.delta_unit == "frames" && c.delta != std::floor(c.delta))
     throw CLI::ValidationError(
         "--delta", fmt::format("expected an integer number of frames, got {}", c.delta));
@@ -161,6 +262,13 @@ void run_eval(const EvalCommand& c) {
                 {"translation_m", eval_stats_json(rows[3].second)},
                 {"rotation_deg", eval_stats_json(rows[4].second)},
                 {"full", eval_stats_json(rows[5].second)}};
+    if (!c.plot.empty()) {
+      eval_draw_plot(c.plot, eval_plot_csv(pairs, alignment, ape),
+                     fmt::format("{} against {}, alignment {}",
+                                 std::filesystem::path(c.est).filename().string(),
+                                 std::filesystem::path(c.ref).filename().string(), c.align));
+      j["plot"] = c.plot;
+    }
     if (!c.ctx.out_dir.empty()) {
       eval_naming("--out", [&] {
         eval_write_csv(c.ctx, "ape.csv", "t,t,translation_m,rotation_deg,full", pairs, ape);
@@ -243,14 +351,20 @@ void setup_eval(CLI::App& sub) {
   sub.add_option(
       "--relations", cmd->relations,
       "Relations FILE (t1 t2 x y z roll pitch yaw): the relation metric of the estimate");
+  sub.add_option("--plot", cmd->plot,
+                 "Draw the reference and the aligned estimate from above and the APE translation "
+                 "error along the path into FILE (.png, .pdf or .svg; python3 with matplotlib)")
+      ->check(eval_plot_validator());
   add_common_options(sub, cmd->ctx);
   sub.get_option("--out")->description(
       "Folder for ape.csv and rpe.csv (the error of every pose pair)");
   sub.get_option("--seed")->description("Seed of the bootstrap intervals");
-  set_examples(sub, {"implicit eval --ref truth.tum --est estimate.tum --align se3",
-                     "implicit eval --ref 00.txt --est 00_est.txt --format kitti --align sim3 "
-                     "--delta 100 --delta-unit m --json",
-                     "implicit eval --est estimate.tum --relations intel.relations"});
+  set_examples(sub,
+               {"implicit eval --ref truth.tum --est estimate.tum --align se3",
+                "implicit eval --ref 00.txt --est 00_est.txt --format kitti --align sim3 "
+                "--delta 100 --delta-unit m --json",
+                "implicit eval --est estimate.tum --relations intel.relations",
+                "implicit eval --ref truth.tum --est estimate.tum --align se2 --plot eval.png"});
   sub.callback([cmd] { run_eval(*cmd); });
 }
 
