@@ -157,5 +157,21 @@ def test_threshold_zero_never_resamples_and_one_always_does():
     assert np.allclose(always.weights, 1 / 100)
 
 
+def test_stub_matches_the_module():
+    # ssm.pyi declares particle_filter with the signature and defaults of ssm.py.
+    import ast
+    import inspect
+    import pathlib
+    stub = ast.parse(pathlib.Path(ssm.__file__).resolve().with_suffix(".pyi").read_text())
+    (fn,) = [n for n in stub.body if isinstance(n, ast.FunctionDef)]
+    defaults = [ast.literal_eval(d) for d in fn.args.defaults]
+    params = list(inspect.signature(ssm.particle_filter).parameters.values())
+    assert [a.arg for a in fn.args.args] == [p.name for p in params]
+    assert defaults == [p.default for p in params if p.default is not inspect.Parameter.empty]
+    fields = [n.target.id for c in stub.body if isinstance(c, ast.ClassDef)
+              and c.name == "FilterResult" for n in c.body]
+    assert fields == list(ssm.FilterResult.__dataclass_fields__)
+
+
 def test_package_exports_the_module():
     assert implicit.ssm is ssm and "ssm" in implicit.__all__
