@@ -14,6 +14,8 @@ grid: grid SLAM on a laser log, its map a numpy array), implicit.mcl.run; implic
 (occupancy grids, CARMEN logs, the likelihood field, the odometry model, a laser ParticleFilter
 and run). Control (spec §2): implicit.control.
 Trajectory scoring (APE, RPE as evo computes them): implicit.eval.
+Your own state-space model (numpy callbacks on all particles at once; bootstrap, implicit or
+guided proposal on the library's engine): implicit.ssm (Model, particle_filter).
 
 Errors are raised as implicit.InvalidArgument (a ValueError) with the library's message.
 

@@ -20,12 +20,10 @@
 #include "implicit/filter/particle_engine.hpp"
 #include "user_model_callbacks.hpp"
 
-namespace implicit::python {
+// Everything lives in ssm (not in implicit::python's unnamed namespace): the module is a unity
+// build, and its other files' helpers must not meet these.
+namespace implicit::python::ssm {
 namespace {
-
-using ssm::Callbacks;
-using ssm::RowMatrix;
-using ssm::VecX;
 
 enum class Proposal { kBootstrap, kImplicit, kGuided };
 
@@ -62,13 +60,13 @@ struct Moved {
 
 /// The linear map X = mu + L^-T xi for every particle, then F(X) in one call and the weight
 /// (implicit_log_weight, as core's linear_map(), whose per-point evaluation cannot be batched).
-void linear_map_all(const Callbacks& cb, const std::vector<ssm::NewtonPoint>& points,
+void linear_map_all(const Callbacks& cb, const std::vector<NewtonPoint>& points,
                     const RowMatrix& xi, const RowMatrix& xp, Moved& m) {
   const Eigen::Index n = xp.rows(), d = xp.cols();
   m.x.resize(n, d);
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t j) {
     const auto r = static_cast<Eigen::Index>(j);
-    const ssm::NewtonPoint& p = points[j];
+    const NewtonPoint& p = points[j];
     VecX offset = xi.row(r).transpose();
     if (p.factor_ok) p.factor.upper_solve_in_place(offset);
     m.x.row(r) = (p.x + (p.factor_ok ? offset : VecX::Zero(d))).transpose();
@@ -76,7 +74,7 @@ void linear_map_all(const Callbacks& cb, const std::vector<ssm::NewtonPoint>& po
   const VecX fx = cb.objective(m.x, xp);
   m.increment.resize(n);
   for (Eigen::Index r = 0; r < n; ++r) {
-    const ssm::NewtonPoint& p = points[static_cast<std::size_t>(r)];
+    const NewtonPoint& p = points[static_cast<std::size_t>(r)];
     m.increment[r] = p.factor_ok ? implicit_log_weight(static_cast<int>(d), xi.row(r).squaredNorm(),
                                                        fx[r], p.factor.log_det_L())
                                  : -std::numeric_limits<double>::infinity();
@@ -87,16 +85,16 @@ Moved implicit_step(const Callbacks& cb, const Settings& s, const RowMatrix& xp)
   const Eigen::Index d = cb.dim;
   // Newton starts at the noise-free move: the transition with zero normals.
   const RowMatrix start = cb.sample_transition(xp, RowMatrix::Zero(xp.rows(), d));
-  ssm::PythonObjective f(cb, xp);
-  const std::vector<ssm::NewtonPoint> points = ssm::lockstep_newton(f, start, s.newton);
+  PythonObjective f(cb, xp);
+  const std::vector<NewtonPoint> points = lockstep_newton(f, start, s.newton);
   const RowMatrix xi = normals(s, cb.step, purpose::kReference, d);
   Moved m;
-  for (const ssm::NewtonPoint& p : points) {
+  for (const NewtonPoint& p : points) {
     m.newton_iterations += p.iterations;
     m.newton_failures += p.factor_ok ? 0 : 1;
   }
   if (s.random_map) {
-    ssm::MapResult r = ssm::lockstep_random_map(f, points, xi, RandomMapOptions{});
+    MapResult r = lockstep_random_map(f, points, xi, RandomMapOptions{});
     m.x = std::move(r.x);
     m.increment = std::move(r.log_weight);
     m.map_failures = r.failures - m.newton_failures;
@@ -260,9 +258,12 @@ py::dict user_model_filter(const py::dict& a) {
 }
 
 }  // namespace
+}  // namespace implicit::python::ssm
+
+namespace implicit::python {
 
 void init_user_model(py::module_& m) {
-  m.def("_user_model_filter", &user_model_filter, py::arg("arguments"),
+  m.def("_user_model_filter", &ssm::user_model_filter, py::arg("arguments"),
         "The particle filter of implicit.ssm.particle_filter (its arguments as a dict).");
 }
 
