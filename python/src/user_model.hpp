@@ -28,11 +28,19 @@ using VecX = Vec<Eigen::Dynamic>;
 using MatX = Mat<Eigen::Dynamic>;
 using Factor = DenseFactor<Eigen::Dynamic>;
 
-/// F at k points: value (k), and with derivatives gradient (k, d) and k Hessians (d, d).
+/// F at k points: value (k), and with derivatives gradient (k, d) and the Hessians (k, d * d),
+/// row r holding point r's row by row (one allocation per call, not one per point).
 struct Evaluation {
   VecX value;
   RowMatrix gradient;
-  std::vector<MatX> hessian;
+  RowMatrix hessian;
+
+  Eigen::Map<RowMatrix> hessian_at(Eigen::Index r) {
+    return {hessian.row(r).data(), gradient.cols(), gradient.cols()};
+  }
+  Eigen::Map<const RowMatrix> hessian_at(Eigen::Index r) const {
+    return {hessian.row(r).data(), gradient.cols(), gradient.cols()};
+  }
 };
 
 /// F(x) = -log p(y | x) - log p(x | x') for many points at once; row r of `x` is a point of

@@ -30,7 +30,8 @@ struct State {
 };
 
 bool finite_derivatives(const Evaluation& e, std::size_t r) {
-  return e.gradient.row(static_cast<Eigen::Index>(r)).allFinite() && e.hessian[r].allFinite();
+  return e.gradient.row(static_cast<Eigen::Index>(r)).allFinite() &&
+         e.hessian.row(static_cast<Eigen::Index>(r)).allFinite();
 }
 
 /// Factors the Hessian at the particle's point and sets its step, or ends the particle by the
@@ -169,7 +170,7 @@ std::vector<NewtonPoint> lockstep_newton(BatchObjective& f, const RowMatrix& x0,
       continue;
     }
     s.gradient = e.gradient.row(static_cast<Eigen::Index>(j)).transpose();
-    s.hessian = e.hessian[j];
+    s.hessian = e.hessian_at(static_cast<Eigen::Index>(j));
   }
   for (;;) {
     std::vector<std::size_t> live;
@@ -197,7 +198,7 @@ std::vector<NewtonPoint> lockstep_newton(BatchObjective& f, const RowMatrix& x0,
           continue;
         }
         s.gradient = full.gradient.row(static_cast<Eigen::Index>(r)).transpose();
-        s.hessian = full.hessian[r];
+        s.hessian = full.hessian_at(static_cast<Eigen::Index>(r));
       } else {
         again.push_back(j);
       }
@@ -216,7 +217,7 @@ std::vector<NewtonPoint> lockstep_newton(BatchObjective& f, const RowMatrix& x0,
           continue;
         }
         s.gradient = e.gradient.row(static_cast<Eigen::Index>(r)).transpose();
-        s.hessian = e.hessian[r];
+        s.hessian = e.hessian_at(static_cast<Eigen::Index>(r));
       }
     }
     for (const std::size_t j : live) {

@@ -116,7 +116,8 @@ void PythonObjective::evaluate(const std::vector<std::size_t>& owner, const RowM
     return;
   }
   const bool has_grad = !cb.gradient.is_none(), has_hess = !cb.hessian.is_none();
-  out.hessian.assign(static_cast<std::size_t>(k), MatX::Zero(d, d));
+  out.gradient.resize(k, d);  // sized first: hessian_at() reads d from it
+  out.hessian.setZero(k, d * d);
   if (has_grad) {
     out.value = cb.objective(x, xp);
     out.gradient = user_gradient(x, xp, out.value);
@@ -152,7 +153,7 @@ void PythonObjective::user_hessian(const RowMatrix& x, const RowMatrix& xp, Eval
     require(!std::isfinite(out.value[r]) || h.allFinite(),
             "{}: expected finite values where F is finite, got a non-finite value in row {}", at,
             r);
-    out.hessian[static_cast<std::size_t>(r)] = 0.5 * (h + h.transpose());
+    out.hessian_at(r) = 0.5 * (h + h.transpose());
   }
 }
 
@@ -178,7 +179,7 @@ void PythonObjective::gradient_differenced(const RowMatrix& x, const RowMatrix& 
     MatX hr(d, d);
     for (Eigen::Index i = 0; i < d; ++i)
       hr.col(i) = (g.row(r * m + 2 * i) - g.row(r * m + 2 * i + 1)).transpose() / (2.0 * h(r, i));
-    out.hessian[static_cast<std::size_t>(r)] = 0.5 * (hr + hr.transpose());
+    out.hessian_at(r) = 0.5 * (hr + hr.transpose());
   }
 }
 
@@ -216,7 +217,7 @@ void PythonObjective::values_differenced(const RowMatrix& x, const RowMatrix& xp
     const Eigen::Index p0 = r * m;
     const double f0 = f[p0];
     out.value[r] = f0;
-    MatX& hr = out.hessian[static_cast<std::size_t>(r)];
+    Eigen::Map<RowMatrix> hr = out.hessian_at(r);
     for (Eigen::Index i = 0; i < d; ++i) {
       const double fp = f[p0 + 1 + 2 * i], fm = f[p0 + 2 + 2 * i];
       out.gradient(r, i) = (fp - fm) / (2.0 * h(r, i));
