@@ -40,8 +40,8 @@ class Model:
         transition_logpdf: needed by the implicit and guided proposals.
         gradient, hessian: optional derivatives of F = -log p(y | x) - log p(x | x_prev) for
             the implicit proposal; missing ones are central finite differences, evaluated in
-            one stacked call (values only: 1 + 2d^2 points per particle; with the gradient:
-            2d gradient points).
+            one stacked call (values only: 1 + 2d^2 points per particle; with the gradient
+            alone: F and the gradient at 2d points per particle).
         proposal: optional, for proposal="guided".
     """
 

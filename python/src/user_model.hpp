@@ -43,14 +43,17 @@ struct Evaluation {
   }
 };
 
+/// What an evaluation computes: F; F and its gradient (the random map's slope); all three.
+enum class Derivatives { kNone, kGradient, kHessian };
+
 /// F(x) = -log p(y | x) - log p(x | x') for many points at once; row r of `x` is a point of
 /// particle owner[r]. Values may be +inf (outside the support); derivatives are read only where
 /// the value is finite.
 class BatchObjective {
  public:
   virtual ~BatchObjective() = default;
-  virtual void evaluate(const std::vector<std::size_t>& owner, const RowMatrix& x, bool derivatives,
-                        Evaluation& out) = 0;
+  virtual void evaluate(const std::vector<std::size_t>& owner, const RowMatrix& x,
+                        Derivatives derivatives, Evaluation& out) = 0;
 };
 
 /// One particle's minimisation: the centre mu, phi = F(mu), the factor of the Hessian used there.

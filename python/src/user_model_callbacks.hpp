@@ -45,7 +45,7 @@ class PythonObjective : public BatchObjective {
  public:
   PythonObjective(const Callbacks& callbacks, const RowMatrix& previous)
       : cb(callbacks), x_prev(previous) {}
-  void evaluate(const std::vector<std::size_t>& owner, const RowMatrix& x, bool derivatives,
+  void evaluate(const std::vector<std::size_t>& owner, const RowMatrix& x, Derivatives derivatives,
                 Evaluation& out) override;
   int calls = 0;  ///< batched evaluations (Python calls of F, each with its derivatives)
 

@@ -120,7 +120,8 @@ void line_search(BatchObjective& f, std::vector<State>& states, std::vector<std:
         owner.push_back(live[r]);
       }
     }
-    f.evaluate(owner, trial, k == 0, k == 0 ? full : e);
+    f.evaluate(owner, trial, k == 0 ? Derivatives::kHessian : Derivatives::kNone,
+               k == 0 ? full : e);
     const Evaluation& got = k == 0 ? full : e;
     std::vector<std::size_t> next;
     for (std::size_t r = 0; r < live.size(); ++r) {
@@ -160,7 +161,7 @@ std::vector<NewtonPoint> lockstep_newton(BatchObjective& f, const RowMatrix& x0,
     states[j].point.x = x0.row(static_cast<Eigen::Index>(j)).transpose();
   }
   Evaluation e;
-  f.evaluate(all, x0, true, e);
+  f.evaluate(all, x0, Derivatives::kHessian, e);
   for (std::size_t j = 0; j < n; ++j) {
     State& s = states[j];
     s.point.value = e.value[static_cast<Eigen::Index>(j)];
@@ -207,7 +208,7 @@ std::vector<NewtonPoint> lockstep_newton(BatchObjective& f, const RowMatrix& x0,
       RowMatrix x(static_cast<Eigen::Index>(again.size()), x0.cols());
       for (std::size_t r = 0; r < again.size(); ++r)
         x.row(static_cast<Eigen::Index>(r)) = states[again[r]].point.x.transpose();
-      f.evaluate(again, x, true, e);
+      f.evaluate(again, x, Derivatives::kHessian, e);
       for (std::size_t r = 0; r < again.size(); ++r) {
         State& s = states[again[r]];
         s.point.value = e.value[static_cast<Eigen::Index>(r)];

@@ -106,27 +106,28 @@ RowMatrix repeat_rows(const RowMatrix& a, Eigen::Index m) {
 }  // namespace
 
 void PythonObjective::evaluate(const std::vector<std::size_t>& owner, const RowMatrix& x,
-                               bool derivatives, Evaluation& out) {
+                               Derivatives derivatives, Evaluation& out) {
   const Eigen::Index k = x.rows(), d = x.cols();
   RowMatrix xp(k, d);
   for (Eigen::Index r = 0; r < k; ++r) xp.row(r) = x_prev.row(static_cast<Eigen::Index>(owner[r]));
   ++calls;
-  if (!derivatives) {
+  if (derivatives == Derivatives::kNone) {
     out.value = cb.objective(x, xp);
     return;
   }
-  const bool has_grad = !cb.gradient.is_none(), has_hess = !cb.hessian.is_none();
+  const bool hessian = derivatives == Derivatives::kHessian;
+  const bool has_grad = !cb.gradient.is_none(), has_hess = hessian && !cb.hessian.is_none();
   out.gradient.resize(k, d);  // sized first: hessian_at() reads d from it
-  out.hessian.setZero(k, d * d);
+  out.hessian.setZero(hessian ? k : 0, d * d);
   if (has_grad) {
     out.value = cb.objective(x, xp);
     out.gradient = user_gradient(x, xp, out.value);
   } else {
-    values_differenced(x, xp, out, !has_hess);
+    values_differenced(x, xp, out, hessian && !has_hess);
   }
   if (has_hess)
     user_hessian(x, xp, out);
-  else if (has_grad)
+  else if (hessian && has_grad)
     gradient_differenced(x, xp, out);
 }
 
@@ -217,13 +218,12 @@ void PythonObjective::values_differenced(const RowMatrix& x, const RowMatrix& xp
     const Eigen::Index p0 = r * m;
     const double f0 = f[p0];
     out.value[r] = f0;
-    Eigen::Map<RowMatrix> hr = out.hessian_at(r);
-    for (Eigen::Index i = 0; i < d; ++i) {
-      const double fp = f[p0 + 1 + 2 * i], fm = f[p0 + 2 + 2 * i];
-      out.gradient(r, i) = (fp - fm) / (2.0 * h(r, i));
-      if (hessian) hr(i, i) = (fp - 2.0 * f0 + fm) / (h(r, i) * h(r, i));
-    }
+    for (Eigen::Index i = 0; i < d; ++i)
+      out.gradient(r, i) = (f[p0 + 1 + 2 * i] - f[p0 + 2 + 2 * i]) / (2.0 * h(r, i));
     if (!hessian) continue;
+    Eigen::Map<RowMatrix> hr = out.hessian_at(r);
+    for (Eigen::Index i = 0; i < d; ++i)
+      hr(i, i) = (f[p0 + 1 + 2 * i] - 2.0 * f0 + f[p0 + 2 + 2 * i]) / (h(r, i) * h(r, i));
     Eigen::Index p = p0 + 1 + 2 * d;
     for (Eigen::Index i = 0; i < d; ++i)
       for (Eigen::Index j = i + 1; j < d; ++j) {

@@ -101,7 +101,7 @@ void evaluate_rays(BatchObjective& f, const std::vector<NewtonPoint>& points,
     x.row(static_cast<Eigen::Index>(r)) = (points[which[r]].x + ray.at() * ray.d).transpose();
   }
   Evaluation e;
-  f.evaluate(which, x, slope, e);
+  f.evaluate(which, x, slope ? Derivatives::kGradient : Derivatives::kNone, e);
   for (std::size_t r = 0; r < which.size(); ++r) {
     Ray& ray = rays[which[r]];
     const auto row = static_cast<Eigen::Index>(r);
