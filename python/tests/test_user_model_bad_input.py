@@ -183,3 +183,23 @@ def test_non_spd_hessian_is_damped_and_the_weights_stay_exact():
         ratios.append(math.exp(r.log_likelihood) / exact)
     se = np.std(ratios, ddof=1) / math.sqrt(len(ratios))
     assert se > 0 and abs(np.mean(ratios) - 1) < 5 * se
+
+
+def test_implicit_start_outside_the_support_is_weight_zero():
+    # Newton starts at the noise-free move 0.9 x_0; where the observation density is zero there
+    # (x <= 0), F is +inf at the start: the particle gets weight zero and is counted, the others
+    # are sampled as usual.
+    seen = {}
+
+    def initial(z):
+        seen["x0"] = z.copy()
+        return z
+
+    def positive(t, x, y):
+        return np.where(x[:, 0] > 0, GOOD["observation_logpdf"](t, x, y), -np.inf)
+
+    r = run({"initial": initial, "observation_logpdf": positive}, proposal="implicit",
+            observations=[0.4], threshold=0.0)()
+    outside = int(np.sum(0.9 * seen["x0"][:, 0] <= 0))
+    assert 0 < outside < N and r.newton_failures[0] == outside
+    assert np.sum(r.weights > 0) <= N - outside and np.isfinite(r.log_likelihood)
