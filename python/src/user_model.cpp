@@ -3,8 +3,8 @@
 // (spec §1.2, §1.3: Newton per particle, linear or random map, exact weights) or the user's own
 // proposal, ESS-triggered resampling with any of the four schemes, and the collectors of the run.
 //
-// Python is called a fixed number of times per step (the implicit proposal: once per Newton
-// iteration and backtracking round), never once per particle. Every random number comes from
+// Python is called a few times per step (the implicit proposal: once per Newton iteration and
+// round of backtracks, for all particles at once), never once per particle. Every random number comes from
 // the library's keyed streams (core/rng.hpp) and is handed to the callbacks as standard normals,
 // so a seed gives the same run for any thread count and whatever numpy's global state is.
 
