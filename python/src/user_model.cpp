@@ -4,9 +4,9 @@
 // proposal, ESS-triggered resampling with any of the four schemes, and the collectors of the run.
 //
 // Python is called a few times per step (the implicit proposal: once per Newton iteration and
-// round of backtracks, for all particles at once), never once per particle. Every random number comes from
-// the library's keyed streams (core/rng.hpp) and is handed to the callbacks as standard normals,
-// so a seed gives the same run for any thread count and whatever numpy's global state is.
+// round of backtracks, for all particles at once), never once per particle. Every random number
+// comes from the library's keyed streams (core/rng.hpp) and is handed to the callbacks as standard
+// normals, so a seed gives the same run for any thread count and whatever numpy's global state is.
 
 #include <pybind11/stl.h>
 
