@@ -24,11 +24,11 @@
 
 #include "context.hpp"
 #include "experiments.hpp"
+#include "experiments/parallel_runs.hpp"
 #include "implicit/build_info.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/share_dir.hpp"
-#include "parallel_runs.hpp"
 #include "registry.hpp"
 #include "report.hpp"
 #include "reproduce_plan.hpp"
@@ -363,8 +363,8 @@ int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt,
   gather_summaries(results, dir, "mcl_summary.csv");
   gather_summaries(results, dir, "slam_summary.csv");
   // Under MPI only rank 0's figures are kept (apps/parallel_runs.hpp): the others draw none.
-  results["figures"] =
-      draw_figures(results, dir, opt.no_figures || rank_index() != 0, ctx.show_progress());
+  results["figures"] = draw_figures(results, dir, opt.no_figures || experiments::rank_index() != 0,
+                                    ctx.show_progress());
   results["files"] = files_of_run(results, dir);
   write_text(dir / "results.json", results.dump(2) + "\n");
   const auto doc = report::build_report(results, dir);

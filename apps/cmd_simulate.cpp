@@ -7,10 +7,10 @@
 
 #include "cmd_simulate_laser.hpp"
 #include "context.hpp"
+#include "experiments/vehicle.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/robot/simulate.hpp"
 #include "registry.hpp"
-#include "vehicle.hpp"
 
 namespace implicit::app {
 namespace {
@@ -19,7 +19,7 @@ struct SimulateCommand {
   std::string model = "unicycle";
   RunContext ctx;  ///< --seed, and --out: here the log FILE
   robot::SimulationOptions options;
-  MotionNoise noise;
+  experiments::MotionNoise noise;
   double range_sd = 0.0, bearing_sd_deg = 0.0;  ///< 0: the spec's Sigma2
   LaserSimulationCommand laser;
   CLI::Option* map = nullptr;  ///< --map: the laser mode
@@ -97,11 +97,11 @@ void setup_simulate(CLI::App& sub) {
     const robot::RobotLog none;  // no declaration: the parameters come from the flags alone
     robot::RobotLog log;
     if (c.model == "unicycle") {
-      const robot::UnicycleParams p = unicycle_params(none, c.noise);
+      const robot::UnicycleParams p = experiments::unicycle_params(none, c.noise);
       log = simulate(c, robot::UnicycleModel(p), 1.0, true);
       log.vehicle = robot::declare_vehicle(p);
     } else {
-      const robot::UteParams p = ute_params(none, c.noise);
+      const robot::UteParams p = experiments::ute_params(none, c.noise);
       log = simulate(c, robot::UteModel(p), 3.0, false);
       log.vehicle = robot::declare_vehicle(p);
     }

@@ -11,8 +11,8 @@
 #include <CLI/CLI.hpp>
 
 #include "context.hpp"
+#include "experiments/parallel_runs.hpp"
 #include "implicit/core/version.hpp"
-#include "parallel_runs.hpp"
 #include "registry.hpp"
 
 namespace implicit::app {
@@ -74,6 +74,6 @@ int run_command(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   // Under an MPI launcher every rank runs the command; see apps/parallel_runs.hpp.
-  implicit::app::RankSession session(argc, argv);
+  implicit::experiments::RankSession session(argc, argv);
   return session.finish(run_command(session.argc(), session.argv()));
 }

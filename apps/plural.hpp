@@ -1,16 +1,7 @@
 #pragma once
-// Counts in printed summaries: "1 run", "20 runs" (never "1 runs").
-
-#include <string>
-
-#include <fmt/format.h>
+// counted(n, "run", "runs") of the experiments layer (experiments/plural.hpp), by its name here.
+#include "experiments/plural.hpp"
 
 namespace implicit::app {
-
-/// `n` and the noun, singular for exactly one, else plural: counted(1, "run", "runs") is
-/// "1 run", counted(0, "data set", "data sets") is "0 data sets".
-inline std::string counted(long long n, const std::string& singular, const std::string& plural) {
-  return fmt::format("{} {}", n, n == 1 ? singular : plural);
-}
-
+using experiments::counted;
 }  // namespace implicit::app

@@ -4,7 +4,8 @@ if(NOT TARGET implicit_report_objects)
   file(GLOB IMPLICIT_REPORT_SOURCES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/apps/report*.cpp)
   find_package(nlohmann_json REQUIRED)
   add_library(implicit_report_objects OBJECT ${IMPLICIT_REPORT_SOURCES})
-  target_include_directories(implicit_report_objects PUBLIC ${PROJECT_SOURCE_DIR}/apps)
+  target_include_directories(implicit_report_objects PUBLIC ${PROJECT_SOURCE_DIR}/apps
+                             ${PROJECT_SOURCE_DIR})
   target_link_libraries(implicit_report_objects PUBLIC implicit::implicit
                         nlohmann_json::nlohmann_json PRIVATE implicit_warnings)
 endif()

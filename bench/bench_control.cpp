@@ -1,18 +1,18 @@
 // Timing of path integral control: one control evaluation for the double slit (M = 50), the
 // robot arm (n = 200; closed form and generic) and Himmelblau (M = 50), and the whole of Table 2 (4
 // x 500 closed-loop runs, parallel over runs, through the experiment's aggregation in
-// apps/slit_table.hpp); the generic estimator with the random map and with a hard wall (mixture
-// over the openings). Figures are recorded in docs/performance.md.
+// experiments/slit_table.hpp); the generic estimator with the random map and with a hard wall
+// (mixture over the openings). Figures are recorded in docs/performance.md.
 #include <benchmark/benchmark.h>
 
 #include <array>
 #include <vector>
 
+#include "experiments/slit_table.hpp"
 #include "implicit/control/double_slit.hpp"
 #include "implicit/control/himmelblau.hpp"
 #include "implicit/control/path_integral.hpp"
 #include "implicit/control/robot_arm.hpp"
-#include "slit_table.hpp"
 
 using namespace implicit::control;
 
@@ -140,37 +140,37 @@ BENCHMARK_CAPTURE(BM_GenericSlitControl, no_wall_random, false, SamplingMap::kRa
     ->Unit(benchmark::kMicrosecond);
 
 void BM_SlitTable2(benchmark::State& state, SlitEstimator estimator,
-                   implicit::app::SlitImplementation implementation) {
+                   implicit::experiments::SlitImplementation implementation) {
   const DoubleSlit slit;
   for (auto _ : state) {
     for (int M : {10, 50, 100, 500}) {
-      implicit::app::SlitTableOptions o;
+      implicit::experiments::SlitTableOptions o;
       o.samples = M;
       o.runs = 500;
       o.estimator = estimator;
       o.implementation = implementation;
-      benchmark::DoNotOptimize(implicit::app::run_slit_table(slit, o).error_u_mean);
+      benchmark::DoNotOptimize(implicit::experiments::run_slit_table(slit, o).error_u_mean);
     }
   }
 }
 BENCHMARK_CAPTURE(BM_SlitTable2, corrected, SlitEstimator::kFrozenWall,
-                  implicit::app::SlitImplementation::kGeneric)
+                  implicit::experiments::SlitImplementation::kGeneric)
     ->Iterations(1)
     ->UseRealTime()
     ->Unit(benchmark::kSecond);
 BENCHMARK_CAPTURE(BM_SlitTable2, paper, SlitEstimator::kPaper,
-                  implicit::app::SlitImplementation::kGeneric)
+                  implicit::experiments::SlitImplementation::kGeneric)
     ->Iterations(1)
     ->UseRealTime()
     ->Unit(benchmark::kSecond);
 // The same tables with DoubleSlit's wall-space estimator (one scalar per sample).
 BENCHMARK_CAPTURE(BM_SlitTable2, corrected_wall_space, SlitEstimator::kFrozenWall,
-                  implicit::app::SlitImplementation::kWallSpace)
+                  implicit::experiments::SlitImplementation::kWallSpace)
     ->Iterations(1)
     ->UseRealTime()
     ->Unit(benchmark::kSecond);
 BENCHMARK_CAPTURE(BM_SlitTable2, paper_wall_space, SlitEstimator::kPaper,
-                  implicit::app::SlitImplementation::kWallSpace)
+                  implicit::experiments::SlitImplementation::kWallSpace)
     ->Iterations(1)
     ->UseRealTime()
     ->Unit(benchmark::kSecond);

@@ -1,4 +1,4 @@
-// Fuzz target: a --resume record (apps/run_record.hpp) as distribute_runs reads it from
+// Fuzz target: a --resume record (experiments/run_record.hpp) as distribute_runs reads it from
 // <out>/.resume/: the first line of the input is taken as the expected key, so both the key check
 // and the numbers are reached.
 //
@@ -11,15 +11,16 @@
 #include <cstring>
 #include <string>
 
-#include "run_record.hpp"
+#include "experiments/run_record.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   const std::string key = text.substr(0, text.find('\n'));
-  implicit::app::RecordValues record;
-  if (!implicit::app::parse_run_record(text, key, record).empty()) return 0;
-  implicit::app::RecordValues again;
-  if (!implicit::app::parse_run_record(implicit::app::format_run_record(key, record), key, again)
+  implicit::experiments::RecordValues record;
+  if (!implicit::experiments::parse_run_record(text, key, record).empty()) return 0;
+  implicit::experiments::RecordValues again;
+  if (!implicit::experiments::parse_run_record(
+           implicit::experiments::format_run_record(key, record), key, again)
            .empty() ||
       again.size() != record.size())
     std::abort();

@@ -3,9 +3,9 @@
 #include <cstdlib>
 #include <string>
 
-#include "transport.hpp"
+#include "experiments/transport.hpp"
 
-namespace implicit::app::transport {
+namespace implicit::experiments::transport {
 
 // Started by mpirun or srun with several processes, a build without MPI would run the whole
 // command in every process, each writing the same files: refuse, saying what to do instead.
@@ -41,4 +41,4 @@ std::uint64_t SharedCounter::take(std::uint64_t k) {
   return v;
 }
 
-}  // namespace implicit::app::transport
+}  // namespace implicit::experiments::transport

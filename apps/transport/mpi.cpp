@@ -10,9 +10,9 @@
 #include <thread>
 #include <vector>
 
-#include "transport.hpp"
+#include "experiments/transport.hpp"
 
-namespace implicit::app::transport {
+namespace implicit::experiments::transport {
 namespace {
 
 bool g_active = false;
@@ -155,4 +155,4 @@ std::uint64_t SharedCounter::take(std::uint64_t k) {
   return old;
 }
 
-}  // namespace implicit::app::transport
+}  // namespace implicit::experiments::transport

@@ -9,12 +9,12 @@
 #include <string>
 
 #include "common.hpp"
+#include "experiments/vehicle.hpp"
 #include "implicit/core/share_dir.hpp"
 #include "implicit/filter/localization.hpp"
 #include "implicit/robot/carpark.hpp"
 #include "implicit/robot/simulate.hpp"
 #include "robot.hpp"
-#include "vehicle.hpp"
 
 namespace implicit::python {
 namespace {
@@ -253,9 +253,9 @@ void init_data(py::module_& m) {
         const bool unicycle = py::isinstance<robot::UnicycleModel>(model);
         // The tool's check (apps/vehicle.cpp, `implicit mcl --model`): a log drives one robot,
         // and the other model would read its controls as something else.
-        app::resolve_model("steps", unicycle ? "unicycle" : "ute",
-                           log.vehicle ? std::optional(log.vehicle->model) : std::nullopt,
-                           log.source.empty() ? std::string("(in memory)") : log.source);
+        experiments::resolve_model("steps", unicycle ? "unicycle" : "ute",
+                                   log.vehicle ? std::optional(log.vehicle->model) : std::nullopt,
+                                   log.source.empty() ? std::string("(in memory)") : log.source);
         const double dt = unicycle ? model.cast<const robot::UnicycleModel&>().dt()
                                    : model.cast<const robot::UteModel&>().dt();
         return filter::make_problem(log, dt);

@@ -137,9 +137,9 @@ std::span<const RunSettingRange> run_setting_ranges(const std::string& command) 
   throw InvalidArgument(fmt::format("command: expected 'mcl' or 'slam', got '{}'", command));
 }
 
-app::MclSettings mcl_settings(const py::dict& kw) {
+experiments::MclSettings mcl_settings(const py::dict& kw) {
   const RunKeywords k(kw, kMclRanges);
-  app::MclSettings s;
+  experiments::MclSettings s;
   s.method = k.text("method");
   s.particles = k.integer("particles");
   s.runs = k.integer("runs");
@@ -178,9 +178,9 @@ app::MclSettings mcl_settings(const py::dict& kw) {
   return s;
 }
 
-app::SlamSettings slam_settings(const py::dict& kw) {
+experiments::SlamSettings slam_settings(const py::dict& kw) {
   const RunKeywords k(kw, kSlamRanges);
-  app::SlamSettings s;
+  experiments::SlamSettings s;
   s.method = k.text("method");
   s.particles = k.integer("particles");
   s.datasets = k.integer("datasets");
@@ -200,9 +200,9 @@ app::SlamSettings slam_settings(const py::dict& kw) {
   return s;
 }
 
-app::RunContext run_context(const py::handle& seed, const py::handle& out,
-                            const py::handle& threads) {
-  app::RunContext ctx;
+experiments::RunContext run_context(const py::handle& seed, const py::handle& out,
+                                    const py::handle& threads) {
+  experiments::RunContext ctx;
   ctx.seed = seed_arg(seed, "seed");
   ctx.out_dir = out.is_none() ? std::string() : path_arg(out, "out").string();
   ctx.threads = static_cast<int>(run_int_arg(threads, kRunThreadsRange));

@@ -9,7 +9,9 @@
 #include <string>
 
 #include "common.hpp"
-#include "experiments.hpp"
+#include "experiments/landmark_mcl.hpp"
+#include "experiments/landmark_slam.hpp"
+#include "experiments/run_context.hpp"
 
 namespace implicit::python {
 
@@ -28,12 +30,12 @@ struct RunSettingRange {
 /// `threads`; tests compare them with the tool's --help.
 std::span<const RunSettingRange> run_setting_ranges(const std::string& command);
 
-app::MclSettings mcl_settings(const py::dict& kw);
-app::SlamSettings slam_settings(const py::dict& kw);
+experiments::MclSettings mcl_settings(const py::dict& kw);
+experiments::SlamSettings slam_settings(const py::dict& kw);
 
 /// The common settings of every runner: seed (--seed: [0, 2^64 - 1]), out (None: no files) and
 /// threads (--threads: [0, 1024]).
-app::RunContext run_context(const py::handle& seed, const py::handle& out,
-                            const py::handle& threads);
+experiments::RunContext run_context(const py::handle& seed, const py::handle& out,
+                                    const py::handle& threads);
 
 }  // namespace implicit::python

@@ -1,5 +1,5 @@
 // The experiments of the command-line tool, called with the same settings structs and the same
-// code (apps/exp_*.cpp), so implicit.mcl.run(...) returns the numbers of `implicit mcl --json`.
+// code (experiments/), so implicit.mcl.run(...) returns the numbers of `implicit mcl --json`.
 // The settings are checked as the tool checks its flags (run_settings.cpp). The result crosses as
 // JSON text; the Python side parses it into a dict.
 
@@ -8,7 +8,9 @@
 #include <nlohmann/json.hpp>
 
 #include "common.hpp"
-#include "experiments.hpp"
+#include "experiments/control.hpp"
+#include "experiments/landmark_mcl.hpp"
+#include "experiments/landmark_slam.hpp"
 #include "implicit/core/parallel.hpp"
 #include "run_settings.hpp"
 
@@ -16,7 +18,7 @@ namespace implicit::python {
 namespace {
 
 template <typename Settings, typename Run>
-std::string run_json(const Settings& s, const app::RunContext& ctx, Run run) {
+std::string run_json(const Settings& s, const experiments::RunContext& ctx, Run run) {
   nlohmann::json j;
   {
     py::gil_scoped_release unlocked;
@@ -35,16 +37,16 @@ void init_runs(py::module_& m) {
       "_run_mcl",
       [](const py::dict& kw, const py::object& seed, const py::object& out,
          const py::object& threads) {
-        const app::MclSettings s = mcl_settings(kw);
-        return run_json(s, run_context(seed, out, threads), &app::run_mcl);
+        const experiments::MclSettings s = mcl_settings(kw);
+        return run_json(s, run_context(seed, out, threads), &experiments::run_mcl);
       },
       py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"));
   m.def(
       "_run_slam",
       [](const py::dict& kw, const py::object& seed, const py::object& out,
          const py::object& threads) {
-        const app::SlamSettings s = slam_settings(kw);
-        return run_json(s, run_context(seed, out, threads), &app::run_slam);
+        const experiments::SlamSettings s = slam_settings(kw);
+        return run_json(s, run_context(seed, out, threads), &experiments::run_slam);
       },
       py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"));
   m.def(
@@ -64,12 +66,12 @@ void init_runs(py::module_& m) {
       "_run_slit",
       [](int samples, int runs, const std::string& mode, const std::string& estimator,
          const py::object& seed, const py::object& out, const py::object& threads) {
-        app::SlitSettings s;
+        experiments::SlitSettings s;
         s.samples = samples;
         s.runs = runs;
         s.mode = mode;
         s.estimator = estimator;
-        return run_json(s, run_context(seed, out, threads), &app::run_slit);
+        return run_json(s, run_context(seed, out, threads), &experiments::run_slit);
       },
       py::arg("samples"), py::arg("runs"), py::arg("mode"), py::arg("estimator"), py::arg("seed"),
       py::arg("out"), py::arg("threads"));
@@ -77,19 +79,19 @@ void init_runs(py::module_& m) {
       "_run_himmelblau",
       [](int runs, int samples, const py::object& seed, const py::object& out,
          const py::object& threads) {
-        app::HimmelblauSettings s;
+        experiments::HimmelblauSettings s;
         s.runs = runs;
         s.samples = samples;
-        return run_json(s, run_context(seed, out, threads), &app::run_himmelblau);
+        return run_json(s, run_context(seed, out, threads), &experiments::run_himmelblau);
       },
       py::arg("runs"), py::arg("samples"), py::arg("seed"), py::arg("out"), py::arg("threads"));
   m.def(
       "_run_arm",
       [](const std::string& estimator, const py::object& seed, const py::object& out,
          const py::object& threads) {
-        app::ArmSettings s;
+        experiments::ArmSettings s;
         s.estimator = estimator;
-        return run_json(s, run_context(seed, out, threads), &app::run_arm);
+        return run_json(s, run_context(seed, out, threads), &experiments::run_arm);
       },
       py::arg("estimator"), py::arg("seed"), py::arg("out"), py::arg("threads"));
 }

@@ -3,11 +3,10 @@
 // rounding of the generic control's central difference (spec §2.5.2: below 1e-7 in u).
 #include <gtest/gtest.h>
 
-#include "context.hpp"
-#include "experiments.hpp"
+#include "experiments/control.hpp"
 #include "implicit/core/error.hpp"
 
-using namespace implicit::app;
+using namespace implicit::experiments;
 
 TEST(ArmExperiment, GenericAndClosedFormGiveTheSameClosedLoop) {
   const RunContext ctx;

@@ -11,19 +11,22 @@
 #include <string>
 #include <vector>
 
-#include "experiments.hpp"
-#include "run_record.hpp"
-#include "slit_table.hpp"
+#include "experiments/control.hpp"
+#include "experiments/landmark_mcl.hpp"
+#include "experiments/landmark_slam.hpp"
+#include "experiments/proposal_gain.hpp"
+#include "experiments/run_record.hpp"
+#include "experiments/slit_table.hpp"
 
 namespace {
 
-using implicit::app::column;
-using implicit::app::NamedRecord;
-using implicit::app::record_from_values;
-using implicit::app::record_json;
-using implicit::app::record_values;
-using implicit::app::RecordField;
-using implicit::app::RecordValues;
+using implicit::experiments::column;
+using implicit::experiments::NamedRecord;
+using implicit::experiments::record_from_values;
+using implicit::experiments::record_json;
+using implicit::experiments::record_values;
+using implicit::experiments::RecordField;
+using implicit::experiments::RecordValues;
 
 // Every kind of field a record may have.
 struct Sample {
@@ -144,12 +147,12 @@ void expect_well_formed(const char* what) {
 }
 
 TEST(RunRecord, ExperimentRecordsAreWellFormed) {
-  expect_well_formed<implicit::app::MclRunRecord>("mcl");
-  expect_well_formed<implicit::app::MclGlobalRunRecord>("mcl global");
-  expect_well_formed<implicit::app::SlamRunRecord>("slam");
-  expect_well_formed<implicit::app::HimmelblauRunRecord>("himmelblau");
-  expect_well_formed<implicit::app::ProposalGainRunRecord>("proposal gain");
-  expect_well_formed<implicit::app::SlitTableRow>("slit");
+  expect_well_formed<implicit::experiments::MclRunRecord>("mcl");
+  expect_well_formed<implicit::experiments::MclGlobalRunRecord>("mcl global");
+  expect_well_formed<implicit::experiments::SlamRunRecord>("slam");
+  expect_well_formed<implicit::experiments::HimmelblauRunRecord>("himmelblau");
+  expect_well_formed<implicit::experiments::ProposalGainRunRecord>("proposal gain");
+  expect_well_formed<implicit::experiments::SlitTableRow>("slit");
 }
 
 }  // namespace

@@ -5,11 +5,11 @@
 
 #include <cmath>
 
+#include "experiments/slit_table.hpp"
 #include "implicit/control/double_slit.hpp"
-#include "slit_table.hpp"
 
 using namespace implicit::control;
-using namespace implicit::app;
+using namespace implicit::experiments;
 
 namespace {
 SlitTable table(int M, SlitEstimator e) {

@@ -1,18 +1,18 @@
 // Reduced Table 2 (spec §2.4.6-2.4.7): 100 closed-loop runs instead of 500. The reference
 // numbers are the spec's 500-run means; tolerances are 4.5 standard errors of OUR mean
 // (sd over runs / sqrt(runs)), which also absorbs the reference's own error (its SE is smaller).
-// The table is the experiment's (apps/slit_table.hpp); the same runs give the same rows for 1 and
-// 2 threads.
+// The table is the experiment's (experiments/slit_table.hpp); the same runs give the same rows for
+// 1 and 2 threads.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "experiments/slit_table.hpp"
 #include "implicit/control/double_slit.hpp"
 #include "implicit/core/parallel.hpp"
-#include "slit_table.hpp"
 
 using namespace implicit::control;
-using namespace implicit::app;
+using namespace implicit::experiments;
 
 namespace {
 SlitTable table(int M, SlitEstimator e, int runs) {

@@ -1,5 +1,5 @@
-// distribute_run_values() (under distribute_runs) and RankSession (apps/parallel_runs.hpp).
-#include "parallel_runs.hpp"
+// distribute_run_values() (under distribute_runs) and RankSession (experiments/parallel_runs.hpp).
+#include "experiments/parallel_runs.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -16,12 +16,12 @@
 #include <fmt/format.h>
 #include <tbb/task_arena.h>
 
+#include "experiments/transport.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/version.hpp"
-#include "transport/transport.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 namespace {
 
 namespace fs = std::filesystem;
@@ -352,4 +352,4 @@ int RankSession::finish(int code) {
 int rank_index() { return transport::rank(); }
 int rank_count() { return transport::size(); }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

@@ -15,20 +15,20 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "exp_mcl_global.hpp"
-#include "experiments.hpp"
+#include "experiments/landmark_mcl.hpp"
+#include "experiments/landmark_mcl_global.hpp"
+#include "experiments/parallel_runs.hpp"
+#include "experiments/run_statistics.hpp"
+#include "experiments/tum_output.hpp"
+#include "experiments/vehicle.hpp"
+#include "experiments/wilson.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/filter/localization.hpp"
 #include "implicit/robot/carpark.hpp"
 #include "implicit/robot/csv_table.hpp"
-#include "parallel_runs.hpp"
-#include "run_statistics.hpp"
-#include "tum_output.hpp"
-#include "vehicle.hpp"
-#include "wilson.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 namespace {
 
 using filter::LocalizationMetrics;
@@ -248,215 +248,159 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
 
 namespace {
 
-/// The runs of run_mcl for one motion model, and the JSON result.
-template <typename Motion>
-nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const Motion& model,
-                             const robot::RangeBearingSensor& sensor, const MclSetup& setup) {
-  const robot::RobotLog& log = setup.log;
-  const auto t_start = setup.start;
-  const double p = setup.p;
-  LocalizationProblem problem = filter::make_problem(log, model.dt());
-  warn_skipped_scans("mcl", s.data_dir.empty() ? "data/carpark" : s.data_dir, problem.schedule,
-                     model.dt());
-  std::string reference_cache;
-  bool reference_from_cache = false;
-  double reference_vs_gps = 0.0;  // RMS distance [m] between the reference track and the GPS
-  if (s.truth == "reference") {
-    const std::filesystem::path data =
-        s.data_dir.empty() ? robot::default_carpark_dir() : std::filesystem::path(s.data_dir);
-    const std::filesystem::path data_file = robot::resolve_data_file(
-        std::filesystem::is_directory(data) ? data / "carpark_dr.csv" : data);
-    // Cached next to the other outputs when --out is given, else in the system temp folder.
-    const std::filesystem::path dir =
-        ctx.out_dir.empty() ? std::filesystem::temp_directory_path() / "implicit-cache"
-                            : std::filesystem::path(ctx.out_dir);
-    const robot::TruthTrack gps = problem.truth;
-    problem.truth =
-        load_or_make_reference(problem, data_file, s, dir, reference_cache, reference_from_cache);
-    double sum = 0.0;
-    int n = 0;
-    for (std::size_t k = 0; k < gps.position.size(); ++k) {
-      if (!gps.position[k].allFinite()) continue;
-      sum += (gps.position[k] - problem.truth.position[k]).squaredNorm();
-      ++n;
-    }
-    reference_vs_gps = n > 0 ? std::sqrt(sum / n) : 0.0;
+/// The reference truth in place of the GPS (--truth reference), with where it came from.
+struct ReferenceTruth {
+  std::string cache;
+  bool from_cache = false;
+  double vs_gps = 0.0;  ///< RMS distance [m] between the reference track and the GPS
+};
+
+ReferenceTruth use_reference_truth(LocalizationProblem& problem, const MclSettings& s,
+                                   const RunContext& ctx) {
+  ReferenceTruth ref;
+  const std::filesystem::path data =
+      s.data_dir.empty() ? robot::default_carpark_dir() : std::filesystem::path(s.data_dir);
+  const std::filesystem::path data_file = robot::resolve_data_file(
+      std::filesystem::is_directory(data) ? data / "carpark_dr.csv" : data);
+  // Cached next to the other outputs when --out is given, else in the system temp folder.
+  const std::filesystem::path dir = ctx.out_dir.empty()
+                                        ? std::filesystem::temp_directory_path() / "implicit-cache"
+                                        : std::filesystem::path(ctx.out_dir);
+  const robot::TruthTrack gps = problem.truth;
+  problem.truth = load_or_make_reference(problem, data_file, s, dir, ref.cache, ref.from_cache);
+  double sum = 0.0;
+  int n = 0;
+  for (std::size_t k = 0; k < gps.position.size(); ++k) {
+    if (!gps.position[k].allFinite()) continue;
+    sum += (gps.position[k] - problem.truth.position[k]).squaredNorm();
+    ++n;
   }
+  ref.vs_gps = n > 0 ? std::sqrt(sum / n) : 0.0;
+  return ref;
+}
 
-  if (s.init != "known" || s.kidnap_at >= 0) return run_mcl_global(s, ctx, model, sensor, problem);
+/// The summaries over the runs that the JSON and the CSV files report.
+struct MclSummary {
+  std::vector<double> err, rmse, hrmse, ess, cpu, wall, used, dropped, newton, max_err, resamplings,
+      min_loglik, gated;
+  int lost = 0, fallbacks = 0, failures = 0;
+};
 
-  filter::FilterOptions options;
-  options.particles = static_cast<std::size_t>(s.particles);
-  options.association.clutter = s.clutter;
-  options.association.label_gate = s.label_gate;
-  filter::ImplicitProposal implicit_proposal;
-  implicit_proposal.map =
-      s.map == "random" ? filter::ImplicitMap::kRandom : filter::ImplicitMap::kLinear;
+MclSummary summarise(const std::vector<MclRunRecord>& records) {
+  using R = MclRunRecord;
+  MclSummary m;
+  m.err = column(records, &R::error_percent);
+  m.rmse = column(records, &R::rmse_m);
+  m.ess = column(records, &R::ess_fraction);
+  m.cpu = column(records, &R::cpu_ms_per_step);
+  m.wall = column(records, &R::wall_ms_per_step);
+  m.used = column(records, &R::detections_used);
+  m.dropped = column(records, &R::detections_dropped);
+  m.newton = column(records, &R::newton_evaluations);
+  m.max_err = column(records, &R::max_error_m);
+  m.resamplings = column(records, &R::resamplings);
+  m.min_loglik = column(records, &R::min_log_likelihood_increment);
+  m.gated = column(records, &R::labelled_gated);
+  for (const R& r : records) {
+    // The heading RMSE only of the runs that have one (truth with headings).
+    if (std::isfinite(r.heading_rmse_rad)) m.hrmse.push_back(r.heading_rmse_rad);
+    m.lost += r.max_error_m > 5.0 ? 1 : 0;
+    m.fallbacks += r.fallbacks;
+    m.failures += r.failures;
+  }
+  return m;
+}
 
-  Progress bar(fmt::format("mcl {} M={}", s.method, s.particles), static_cast<std::size_t>(s.runs),
-               ctx.show_progress());
-  auto run_number = [&](std::size_t r) {
-    // Every particle's randomness comes from Rng({seed * runs + run, step, particle, purpose}).
-    filter::FilterOptions o = options;
-    o.seed = ctx.seed * static_cast<std::uint64_t>(s.runs) + static_cast<std::uint64_t>(r);
-    return s.method == "implicit"
-               ? filter::run_localization(problem, model, sensor, implicit_proposal, o)
-               : filter::run_localization(problem, model, sensor, filter::BootstrapProposal{}, o);
-  };
-  const std::string settings = fmt::format(
+MclRunRecord record_of(const LocalizationRun& run, const LocalizationMetrics& m) {
+  const auto steps = static_cast<double>(run.steps.size());
+  MclRunRecord rec;
+  rec.error_percent = m.error_percent;
+  rec.rmse_m = m.rmse;
+  rec.heading_rmse_rad = m.heading_rmse;
+  rec.ess_fraction = m.ess_fraction;
+  rec.cpu_ms_per_step = 1e3 * run.cpu_seconds / steps;
+  rec.wall_ms_per_step = 1e3 * run.seconds / steps;
+  rec.detections_used = m.detections_used;
+  rec.detections_dropped = m.detections_dropped;
+  rec.newton_evaluations = m.newton_evaluations;
+  rec.max_error_m = m.max_error;
+  rec.resamplings = run.resamplings;
+  rec.min_log_likelihood_increment = m.min_log_likelihood_increment;
+  rec.fallbacks = m.fallbacks;
+  rec.failures = m.failures;
+  rec.labelled_gated = m.gated;
+  return rec;
+}
+
+/// The settings the records depend on (parallel_runs.hpp: the key of --resume).
+std::string runs_key(const MclSettings& s, const RunContext& ctx, const MclSetup& setup) {
+  return fmt::format(
       "seed={} method={} M={} config={} p={:a} q={:a} map={} clutter={} sigma2={} truth={} "
       "gps_std={:a} reference_M={} data={} model={} control_sd={:a} state_sd={:a} label_gate={:a} "
       "range_sd={:a} "
       "bearing_sd={:a}",
-      ctx.seed, s.method, s.particles, s.config, p, s.q, s.map, s.clutter, s.sigma2, s.truth,
+      ctx.seed, s.method, s.particles, s.config, setup.p, s.q, s.map, s.clutter, s.sigma2, s.truth,
       s.gps_std, s.reference_particles, s.data_dir, setup.model_name, fmt::join(s.control_sd, ","),
       fmt::join(s.state_sd, ","), s.label_gate, s.range_sd, s.bearing_sd_deg);
-  const auto records =
-      distribute_runs(ctx, "mcl", settings, static_cast<std::size_t>(s.runs), [&](std::size_t r) {
-        const LocalizationRun run = run_number(r);
-        const LocalizationMetrics m =
-            filter::localization_metrics(run, problem.truth, options.particles);
-        const auto steps = static_cast<double>(run.steps.size());
-        bar.tick();
-        MclRunRecord rec;
-        rec.error_percent = m.error_percent;
-        rec.rmse_m = m.rmse;
-        rec.heading_rmse_rad = m.heading_rmse;
-        rec.ess_fraction = m.ess_fraction;
-        rec.cpu_ms_per_step = 1e3 * run.cpu_seconds / steps;
-        rec.wall_ms_per_step = 1e3 * run.seconds / steps;
-        rec.detections_used = m.detections_used;
-        rec.detections_dropped = m.detections_dropped;
-        rec.newton_evaluations = m.newton_evaluations;
-        rec.max_error_m = m.max_error;
-        rec.resamplings = run.resamplings;
-        rec.min_log_likelihood_increment = m.min_log_likelihood_increment;
-        rec.fallbacks = m.fallbacks;
-        rec.failures = m.failures;
-        rec.labelled_gated = m.gated;
-        return rec;
-      });
-  bar.finish();
-  using R = MclRunRecord;
-  const std::vector<double> err = column(records, &R::error_percent),
-                            rmse = column(records, &R::rmse_m),
-                            ess = column(records, &R::ess_fraction),
-                            cpu = column(records, &R::cpu_ms_per_step),
-                            wall = column(records, &R::wall_ms_per_step),
-                            used = column(records, &R::detections_used),
-                            dropped = column(records, &R::detections_dropped),
-                            newton = column(records, &R::newton_evaluations),
-                            max_err = column(records, &R::max_error_m),
-                            resamplings = column(records, &R::resamplings),
-                            min_loglik = column(records, &R::min_log_likelihood_increment),
-                            gated = column(records, &R::labelled_gated);
-  std::vector<double> hrmse;  // the runs with a heading RMSE (truth with headings)
-  int lost = 0, fallbacks = 0, failures = 0;
-  for (const MclRunRecord& r : records) {
-    if (std::isfinite(r.heading_rmse_rad)) hrmse.push_back(r.heading_rmse_rad);
-    lost += r.max_error_m > 5.0 ? 1 : 0;
-    fallbacks += r.fallbacks;
-    failures += r.failures;
-  }
-  if (const double g = std::accumulate(gated.begin(), gated.end(), 0.0); g > 0)
-    fmt::print(stderr,
-               "implicit mcl: warning: {} labelled detections ({} per run) were left out: the "
-               "predicted pose could not produce them (d^2 > --label-gate {:g}); --label-gate 0 "
-               "keeps every label (\"labelled_gated\" in the JSON counts them)\n",
-               g, g / static_cast<double>(gated.size()), s.label_gate);
-  // Only rank 0 writes (parallel_runs.hpp), and only the file needs the whole run.
-  if (!ctx.out_dir.empty() && rank_index() == 0) {
-    // The run with the median err% (the lower median for an even count): a typical run, not the
-    // luckiest or a lost one. Recomputed: its result depends only on its number.
-    std::vector<std::size_t> order(err.size());
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return err[a] < err[b]; });
-    const std::size_t median_run = order[(order.size() - 1) / 2];
-    std::string name = fmt::format("mcl_{}_M{}", s.method, s.particles);
-    if (s.config != "A" || s.p >= 0) name += fmt::format("_config{}", s.config);
-    if (s.p >= 0) name += fmt::format("_p{}", s.p);
-    write_trajectory(ctx.csv_path(name + "_trajectory.csv"), problem, run_number(median_run));
-  }
+}
 
-  if (rank_index() == 0 && (!s.trajectory.empty() || !s.truth_trajectory.empty()))
-    write_mcl_tum_files(s, problem, run_number(0));
-
-  // Dead reckoning from the prior mean: the error with no laser at all.
-  std::vector<Pose> dr;
-  Pose x = problem.initial_mean;
-  for (std::size_t n = 0; n < problem.schedule.steps.size(); ++n)
-    dr.push_back(x = model.with_dt(problem.step_dt[n]).predict(x, problem.schedule.steps[n].u));
-
-  // The beacon extraction and the sensor model against the survey: every detection placed in the
-  // world with the ground-truth pose, and its distance to the nearest surveyed beacon (spec §3.8).
-  std::vector<robot::DetectionResidual> residuals;
+/// The beacon extraction and the sensor model against the survey: every detection placed in the
+/// world with the ground-truth pose, and its distance to the nearest surveyed beacon (spec §3.8).
+std::vector<robot::DetectionResidual> detection_check(const robot::RobotLog& log,
+                                                      const LocalizationProblem& problem) {
   const std::size_t steps = problem.schedule.steps.size();
-  if (problem.truth.position.size() == steps && problem.truth.heading.size() == steps) {
-    std::vector<Pose> truth_poses(steps);
-    for (std::size_t n = 0; n < steps; ++n)
-      truth_poses[n] << problem.truth.position[n], problem.truth.heading[n];
-    residuals = robot::detection_residuals(log, problem.schedule, truth_poses);
-  }
-  std::vector<double> distances;
-  for (const auto& r : residuals)
-    if (std::isfinite(r.distance)) distances.push_back(r.distance);
+  if (problem.truth.position.size() != steps || problem.truth.heading.size() != steps) return {};
+  std::vector<Pose> truth_poses(steps);
+  for (std::size_t n = 0; n < steps; ++n)
+    truth_poses[n] << problem.truth.position[n], problem.truth.heading[n];
+  return robot::detection_residuals(log, problem.schedule, truth_poses);
+}
 
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  nlohmann::json j;
-  j["method"] = s.method;
-  if (s.method == "implicit") j["map"] = s.map;
-  j["particles"] = s.particles;
-  j["runs"] = s.runs;
-  j["config"] = s.config;
-  j["model"] = setup.model_name;
-  j["p"] = p;
-  j["q"] = model.params().state_std(0);
-  j["control_sd"] = {model.params().control_std(0), model.params().control_std(1)};
-  j["state_sd"] = {model.params().state_std(0), model.params().state_std(1),
-                   model.params().state_std(2)};
-  j["sigma2"] = s.sigma2;
-  j["clutter"] = s.clutter;
-  j["seed"] = ctx.seed;
-  j["threads"] = active_threads();
-  j["error_percent_mean"] = mean_of(err);
-  j["error_percent_std"] = sd_of(err);
-  j["error_percent_median"] = median_of(err);
-  j["error_percent_runs"] = err;
-  j["rmse_m"] = mean_of(rmse);
-  j["rmse_m_std"] = sd_of(rmse);
-  j["rmse_m_median"] = median_of(rmse);
-  j["max_error_m_median"] = median_of(max_err);
-  j["heading_rmse_rad"] = mean_of(hrmse);
-  j["ess_mean"] = mean_of(ess);
-  j["ess_std"] = sd_of(ess);
-  j["resamplings_mean"] = mean_of(resamplings);
-  j["cpu_ms_per_step"] = mean_of(cpu);
-  j["cpu_ms_per_step_std"] = sd_of(cpu);
-  j["cpu_ms_per_step_median"] = median_of(cpu);
-  j["wall_ms_per_step"] = mean_of(wall);
-  j["newton_evaluations_per_update"] = mean_of(newton);
-  j["min_log_likelihood_increment_median"] = median_of(min_loglik);
+/// The means and spreads over the runs, by the keys of docs/cli.md.
+void add_summary_json(nlohmann::json& j, const MclSummary& m) {
+  j["error_percent_mean"] = mean_of(m.err);
+  j["error_percent_std"] = sd_of(m.err);
+  j["error_percent_median"] = median_of(m.err);
+  j["error_percent_runs"] = m.err;
+  j["rmse_m"] = mean_of(m.rmse);
+  j["rmse_m_std"] = sd_of(m.rmse);
+  j["rmse_m_median"] = median_of(m.rmse);
+  j["max_error_m_median"] = median_of(m.max_err);
+  j["heading_rmse_rad"] = mean_of(m.hrmse);
+  j["ess_mean"] = mean_of(m.ess);
+  j["ess_std"] = sd_of(m.ess);
+  j["resamplings_mean"] = mean_of(m.resamplings);
+  j["cpu_ms_per_step"] = mean_of(m.cpu);
+  j["cpu_ms_per_step_std"] = sd_of(m.cpu);
+  j["cpu_ms_per_step_median"] = median_of(m.cpu);
+  j["wall_ms_per_step"] = mean_of(m.wall);
+  j["newton_evaluations_per_update"] = mean_of(m.newton);
+  j["min_log_likelihood_increment_median"] = median_of(m.min_loglik);
+}
+
+/// The data and what the runs made of it, by the keys of docs/cli.md.
+void add_data_json(nlohmann::json& j, const MclSettings& s, const MclSummary& m,
+                   const LocalizationProblem& problem) {
   j["detections_total"] = problem.detections_total;
-  j["detections_used"] = mean_of(used);
-  j["detections_dropped"] = mean_of(dropped);
+  j["detections_used"] = mean_of(m.used);
+  j["detections_dropped"] = mean_of(m.dropped);
   j["label_gate"] = s.label_gate;
-  j["labelled_gated"] = mean_of(gated);  // per run: labelled detections left out by the gate
+  j["labelled_gated"] = mean_of(m.gated);  // per run: labelled detections left out by the gate
   j["scans_with_detections"] = problem.schedule.scans_with_observations;
   j["scans_skipped"] = problem.schedule.scans_skipped;
   j["detections_skipped"] = problem.schedule.observations_skipped;
   j["steps"] = problem.schedule.steps.size();
-  j["lost_runs"] = lost;
+  j["lost_runs"] = m.lost;
   // Wilson 95 % interval of the lost fraction (wilson.hpp): compare intervals, not counts.
-  {
-    const auto ci = wilson95(lost, static_cast<double>(s.runs));
-    j["lost_fraction_ci95"] = {ci[0], ci[1]};
-  }
-  j["max_error_m_runs"] = max_err;
-  j["cholesky_fallbacks"] = fallbacks;
-  j["particle_failures"] = failures;
-  j["dead_reckoning_error_percent"] = filter::error_percent(dr, problem.truth);
+  const auto ci = wilson95(m.lost, static_cast<double>(s.runs));
+  j["lost_fraction_ci95"] = {ci[0], ci[1]};
+  j["max_error_m_runs"] = m.max_err;
+  j["cholesky_fallbacks"] = m.fallbacks;
+  j["particle_failures"] = m.failures;
+}
+
+void add_truth_json(nlohmann::json& j, const MclSettings& s, const ReferenceTruth& ref,
+                    const std::vector<robot::DetectionResidual>& residuals) {
   j["ground_truth"] = s.truth;
   if (s.truth == "gps") {
     j["ground_truth_detail"] = "GPS fixes interpolated linearly to the step times";
@@ -464,24 +408,29 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
     j["ground_truth_detail"] = fmt::format(
         "weighted mean of a GPS-aided implicit MCL run (config A, GPS std {} m, M = {}, seed 1)",
         s.gps_std, s.reference_particles);
-    j["reference_cache"] = reference_cache;
-    j["reference_from_cache"] = reference_from_cache;
-    j["reference_vs_gps_rmse_m"] = reference_vs_gps;
+    j["reference_cache"] = ref.cache;
+    j["reference_from_cache"] = ref.from_cache;
+    j["reference_vs_gps_rmse_m"] = ref.vs_gps;
   }
-  if (!distances.empty()) {
-    const double within = static_cast<double>(
-        std::count_if(distances.begin(), distances.end(), [](double d) { return d < 0.5; }));
-    j["detection_check"] = {
-        {"pose", s.truth == "reference" ? "reference track" : "GPS track"},
-        {"detections_placed", distances.size()},  // those with a truth heading
-        {"distance_to_nearest_beacon_median_m", median_of(distances)},
-        {"within_0_5_m_fraction", within / static_cast<double>(distances.size())}};
-  }
-  j["seconds"] = seconds;
+  std::vector<double> distances;
+  for (const auto& r : residuals)
+    if (std::isfinite(r.distance)) distances.push_back(r.distance);
+  if (distances.empty()) return;
+  const double within = static_cast<double>(
+      std::count_if(distances.begin(), distances.end(), [](double d) { return d < 0.5; }));
+  j["detection_check"] = {
+      {"pose", s.truth == "reference" ? "reference track" : "GPS track"},
+      {"detections_placed", distances.size()},  // those with a truth heading
+      {"distance_to_nearest_beacon_median_m", median_of(distances)},
+      {"within_0_5_m_fraction", within / static_cast<double>(distances.size())}};
+}
 
-  if (!ctx.out_dir.empty()) {
-    const auto file = ctx.csv_path("mcl_detections.csv");
-    OutputFile output(file);
+/// mcl_detections.csv, the appended row of mcl_summary.csv and mcl_beacons.csv.
+void write_mcl_csv(const MclSettings& s, const RunContext& ctx, double p, const MclSummary& m,
+                   const LocalizationProblem& problem,
+                   const std::vector<robot::DetectionResidual>& residuals) {
+  {
+    OutputFile output(ctx.csv_path("mcl_detections.csv"));
     std::ostream& d = output.stream();
     d << "time,scan,range,bearing,x,y,nearest_beacon_id,distance\n";
     for (const auto& r : residuals)
@@ -492,28 +441,118 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
           r.distance);
     output.commit();
   }
-  if (!ctx.out_dir.empty()) {
-    OutputFile summary(ctx.csv_path("mcl_summary.csv"), OutputFile::Mode::kAppend);
-    std::ostream& out = summary.stream();
-    if (summary.fresh())
-      out << "method,particles,runs,config,p,error_percent_mean,error_percent_std,"
-             "error_percent_median,rmse_m,heading_rmse_rad,lost_runs,ess_mean,cpu_ms_per_step,"
-             "seed\n";
-    out << fmt::format("{},{},{},{},{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{},{:.6f},{:.6f},{}\n",
-                       s.method, s.particles, s.runs, s.config, p, mean_of(err), sd_of(err),
-                       median_of(err), mean_of(rmse), mean_of(hrmse), lost, mean_of(ess),
-                       mean_of(cpu), ctx.seed);
-    summary.commit();
-    OutputFile beacons(ctx.csv_path("mcl_beacons.csv"));
-    std::ostream& b = beacons.stream();
-    b << "id,x,y\n";
-    for (std::size_t k = 0; k < problem.map.size(); ++k)
-      b << fmt::format("{},{:.6f},{:.6f}\n", problem.map.id(k), problem.map.position(k)(0),
-                       problem.map.position(k)(1));
-    beacons.commit();
+  OutputFile summary(ctx.csv_path("mcl_summary.csv"), OutputFile::Mode::kAppend);
+  std::ostream& out = summary.stream();
+  if (summary.fresh())
+    out << "method,particles,runs,config,p,error_percent_mean,error_percent_std,"
+           "error_percent_median,rmse_m,heading_rmse_rad,lost_runs,ess_mean,cpu_ms_per_step,"
+           "seed\n";
+  out << fmt::format("{},{},{},{},{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{},{:.6f},{:.6f},{}\n",
+                     s.method, s.particles, s.runs, s.config, p, mean_of(m.err), sd_of(m.err),
+                     median_of(m.err), mean_of(m.rmse), mean_of(m.hrmse), m.lost, mean_of(m.ess),
+                     mean_of(m.cpu), ctx.seed);
+  summary.commit();
+  OutputFile beacons(ctx.csv_path("mcl_beacons.csv"));
+  std::ostream& b = beacons.stream();
+  b << "id,x,y\n";
+  for (std::size_t k = 0; k < problem.map.size(); ++k)
+    b << fmt::format("{},{:.6f},{:.6f}\n", problem.map.id(k), problem.map.position(k)(0),
+                     problem.map.position(k)(1));
+  beacons.commit();
+}
+
+/// The runs of run_mcl for one motion model, and the JSON result.
+template <typename Motion>
+nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const Motion& model,
+                             const robot::RangeBearingSensor& sensor, const MclSetup& setup) {
+  LocalizationProblem problem = filter::make_problem(setup.log, model.dt());
+  warn_skipped_scans("mcl", s.data_dir.empty() ? "data/carpark" : s.data_dir, problem.schedule,
+                     model.dt());
+  const ReferenceTruth ref =
+      s.truth == "reference" ? use_reference_truth(problem, s, ctx) : ReferenceTruth{};
+  if (s.init != "known" || s.kidnap_at >= 0) return run_mcl_global(s, ctx, model, sensor, problem);
+
+  filter::FilterOptions options;
+  options.particles = static_cast<std::size_t>(s.particles);
+  options.association.clutter = s.clutter;
+  options.association.label_gate = s.label_gate;
+  filter::ImplicitProposal implicit_proposal;
+  implicit_proposal.map =
+      s.map == "random" ? filter::ImplicitMap::kRandom : filter::ImplicitMap::kLinear;
+  ProgressBar bar(fmt::format("mcl {} M={}", s.method, s.particles),
+                  static_cast<std::size_t>(s.runs), ctx.show_progress());
+  auto run_number = [&](std::size_t r) {
+    // Every particle's randomness comes from Rng({seed * runs + run, step, particle, purpose}).
+    filter::FilterOptions o = options;
+    o.seed = ctx.seed * static_cast<std::uint64_t>(s.runs) + static_cast<std::uint64_t>(r);
+    return s.method == "implicit"
+               ? filter::run_localization(problem, model, sensor, implicit_proposal, o)
+               : filter::run_localization(problem, model, sensor, filter::BootstrapProposal{}, o);
+  };
+  const auto records = distribute_runs(
+      ctx, "mcl", runs_key(s, ctx, setup), static_cast<std::size_t>(s.runs), [&](std::size_t r) {
+        const LocalizationRun run = run_number(r);
+        bar.tick();
+        return record_of(run, filter::localization_metrics(run, problem.truth, options.particles));
+      });
+  bar.finish();
+  const MclSummary m = summarise(records);
+  if (const double g = std::accumulate(m.gated.begin(), m.gated.end(), 0.0); g > 0)
+    fmt::print(stderr,
+               "implicit mcl: warning: {} labelled detections ({} per run) were left out: the "
+               "predicted pose could not produce them (d^2 > --label-gate {:g}); --label-gate 0 "
+               "keeps every label (\"labelled_gated\" in the JSON counts them)\n",
+               g, g / static_cast<double>(m.gated.size()), s.label_gate);
+  // Only rank 0 writes (parallel_runs.hpp), and only the file needs the whole run.
+  if (!ctx.out_dir.empty() && rank_index() == 0) {
+    // The run with the median err% (the lower median for an even count): a typical run, not the
+    // luckiest or a lost one. Recomputed: its result depends only on its number.
+    std::vector<std::size_t> order(m.err.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return m.err[a] < m.err[b]; });
+    const std::size_t median_run = order[(order.size() - 1) / 2];
+    std::string name = fmt::format("mcl_{}_M{}", s.method, s.particles);
+    if (s.config != "A" || s.p >= 0) name += fmt::format("_config{}", s.config);
+    if (s.p >= 0) name += fmt::format("_p{}", s.p);
+    write_trajectory(ctx.csv_path(name + "_trajectory.csv"), problem, run_number(median_run));
   }
+  if (rank_index() == 0 && (!s.trajectory.empty() || !s.truth_trajectory.empty()))
+    write_mcl_tum_files(s, problem, run_number(0));
+
+  // Dead reckoning from the prior mean: the error with no laser at all.
+  std::vector<Pose> dr;
+  Pose x = problem.initial_mean;
+  for (std::size_t n = 0; n < problem.schedule.steps.size(); ++n)
+    dr.push_back(x = model.with_dt(problem.step_dt[n]).predict(x, problem.schedule.steps[n].u));
+  const std::vector<robot::DetectionResidual> residuals = detection_check(setup.log, problem);
+
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - setup.start).count();
+  nlohmann::json j;
+  j["method"] = s.method;
+  if (s.method == "implicit") j["map"] = s.map;
+  j["particles"] = s.particles;
+  j["runs"] = s.runs;
+  j["config"] = s.config;
+  j["model"] = setup.model_name;
+  j["p"] = setup.p;
+  j["q"] = model.params().state_std(0);
+  j["control_sd"] = {model.params().control_std(0), model.params().control_std(1)};
+  j["state_sd"] = {model.params().state_std(0), model.params().state_std(1),
+                   model.params().state_std(2)};
+  j["sigma2"] = s.sigma2;
+  j["clutter"] = s.clutter;
+  j["seed"] = ctx.seed;
+  j["threads"] = active_threads();
+  add_summary_json(j, m);
+  add_data_json(j, s, m, problem);
+  j["dead_reckoning_error_percent"] = filter::error_percent(dr, problem.truth);
+  add_truth_json(j, s, ref, residuals);
+  j["seconds"] = seconds;
+  if (!ctx.out_dir.empty()) write_mcl_csv(s, ctx, setup.p, m, problem, residuals);
   return j;
 }
 
 }  // namespace
-}  // namespace implicit::app
+}  // namespace implicit::experiments

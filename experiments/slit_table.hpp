@@ -6,9 +6,9 @@
 // (control::simulate_slit_run) is the alternative, an independent check. The table is the
 // experiment's.
 //
-//   app::SlitTableOptions o;                 // M = 50, 500 runs, corrected estimator, seed 1
-//   const auto t = app::run_slit_table(control::DoubleSlit{}, o);
-//   t.error_u_mean;  t.crash_fraction;       // fractions, not %
+//   experiments::SlitTableOptions o;                 // M = 50, 500 runs, corrected estimator, seed
+//   1 const auto t = experiments::run_slit_table(control::DoubleSlit{}, o); t.error_u_mean;
+//   t.crash_fraction;       // fractions, not %
 //
 // run_slit_table spreads the runs over the threads of one process; `implicit slit`
 // (exp_slit.cpp) spreads the same rows over MPI ranks too (parallel_runs.hpp) and summarises
@@ -18,12 +18,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "experiments/run_record.hpp"
 #include "implicit/control/double_slit.hpp"
 #include "implicit/control/double_slit_problem.hpp"
 #include "implicit/control/path_integral.hpp"
-#include "run_record.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 /// What estimates the control in a run.
 enum class SlitImplementation {
@@ -102,4 +102,4 @@ SlitTableRow slit_table_row(const control::DoubleSlit& slit, const SlitTableOpti
                             std::uint64_t run);
 SlitTable summarise_slit_table(std::vector<SlitTableRow> rows);
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

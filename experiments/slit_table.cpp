@@ -1,13 +1,13 @@
-#include "slit_table.hpp"
+#include "experiments/slit_table.hpp"
 
 #include <cmath>
 #include <utility>
 
+#include "experiments/run_statistics.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
-#include "run_statistics.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 control::EstimatorOptions slit_estimator_options(control::SlitEstimator estimator, int samples) {
   control::EstimatorOptions o;
@@ -114,4 +114,4 @@ SlitTable run_slit_table(const control::DoubleSlit& slit, const SlitTableOptions
   return summarise_slit_table(std::move(rows));
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

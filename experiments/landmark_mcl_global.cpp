@@ -13,14 +13,14 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "context.hpp"
-#include "exp_mcl_global.hpp"
+#include "experiments/landmark_mcl_global.hpp"
+#include "experiments/parallel_runs.hpp"
+#include "experiments/run_context.hpp"
+#include "experiments/run_statistics.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/filter/global_run.hpp"
-#include "parallel_runs.hpp"
-#include "run_statistics.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 void check_global_settings(const MclSettings& s) {
   require(s.init == "known" || s.init == "global", "mcl --init: expected known or global, got '{}'",
@@ -160,9 +160,9 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
       s.kld_err, s.kld_z, s.min_particles, s.max_particles, s.cover_spacing, s.cover_headings,
       s.map, s.clutter, s.data_dir, s.config, s.p, s.q, fmt::join(s.control_sd, ","),
       fmt::join(s.state_sd, ","), s.sigma2, s.range_sd, s.bearing_sd_deg, s.label_gate);
-  Progress bar(fmt::format("mcl {} {} M={}", s.init == "global" ? "global" : "kidnap", s.method,
-                           s.particles),
-               runs, ctx.show_progress());
+  ProgressBar bar(fmt::format("mcl {} {} M={}", s.init == "global" ? "global" : "kidnap", s.method,
+                              s.particles),
+                  runs, ctx.show_progress());
   // Run r: its seed and start depend only on r, so any rank (or the CSV writer) can redo it.
   const auto run_number = [&](std::size_t r) {
     filter::FilterOptions o = options;
@@ -273,4 +273,4 @@ nlohmann::json run_mcl_global(const MclSettings& s, const RunContext& ctx,
   return run_global(s, ctx, model, sensor, problem);
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

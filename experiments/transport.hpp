@@ -1,13 +1,13 @@
 #pragma once
-// What apps/parallel_runs.cpp needs from the processes of a job. Two implementations, chosen at
-// link time: local.cpp (one process) and mpi.cpp (MPI, in the IMPLICIT_WITH_MPI build).
+// What experiments/parallel_runs.cpp needs from the processes of a job. Two implementations, chosen
+// at link time: local.cpp (one process) and mpi.cpp (MPI, in the IMPLICIT_WITH_MPI build).
 
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
 
-namespace implicit::app::transport {
+namespace implicit::experiments::transport {
 
 /// Starts MPI when the process was launched by an MPI launcher; returns whether it did.
 bool start(int* argc, char*** argv);
@@ -41,4 +41,4 @@ class SharedCounter {
   std::unique_ptr<State> state_;
 };
 
-}  // namespace implicit::app::transport
+}  // namespace implicit::experiments::transport

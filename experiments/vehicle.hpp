@@ -9,7 +9,7 @@
 #include "implicit/robot/unicycle_model.hpp"
 #include "implicit/robot/ute_model.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 /// The model to run: `flag` ("ute", "unicycle" or empty) checked against the model the data
 /// declare. Empty flag: the declared model, "ute" for data that declare none (the Car Park
@@ -41,4 +41,4 @@ robot::UteParams ute_params(const robot::RobotLog& log, const MotionNoise& noise
 robot::UnicycleParams unicycle_params(const robot::RobotLog& log, const MotionNoise& noise,
                                       robot::UnicycleParams base = {});
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

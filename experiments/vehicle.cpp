@@ -1,13 +1,13 @@
-#include "vehicle.hpp"
+#include "experiments/vehicle.hpp"
 
 #include <cstdio>
 
 #include <fmt/format.h>
 
+#include "experiments/plural.hpp"
 #include "implicit/core/error.hpp"
-#include "plural.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 namespace {
 
 /// What the two controls of each model mean, for the mismatch message.
@@ -90,4 +90,4 @@ robot::UnicycleParams unicycle_params(const robot::RobotLog& log, const MotionNo
   return with_noise(log.vehicle ? robot::unicycle_params(*log.vehicle, p) : p, noise);
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

@@ -33,10 +33,10 @@
 
 #include <fmt/format.h>
 
-#include "context.hpp"
-#include "run_record.hpp"
+#include "experiments/run_context.hpp"
+#include "experiments/run_record.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 /// The untyped loop under distribute_runs: run(i) returns record_values of run i's record and
 /// `check` says why numbers read back from a --resume file are not such a record (empty: they
@@ -93,4 +93,4 @@ class RankSession {
 int rank_index();
 int rank_count();
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

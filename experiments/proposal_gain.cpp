@@ -15,15 +15,15 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "experiments.hpp"
+#include "experiments/parallel_runs.hpp"
+#include "experiments/proposal_gain.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/filter/localization.hpp"
 #include "implicit/robot/carpark.hpp"
 #include "implicit/robot/simulate.hpp"
-#include "parallel_runs.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 namespace {
 
 /// One point of a sweep: the step length and the sensor noise.
@@ -95,8 +95,8 @@ ProposalGainRunRecord gain_run(const GainPoint& pt, const ProposalGainSettings& 
 using GainField = double ProposalGainRunRecord::*;
 
 /// Mean and standard error (sd / sqrt(n)) of field `k` of the records, less field `k_minus`.
-std::pair<double, double> mean_se(const std::vector<ProposalGainRunRecord>& recs, GainField k,
-                                  GainField k_minus = nullptr) {
+std::pair<double, double> paired_mean_se(const std::vector<ProposalGainRunRecord>& recs,
+                                         GainField k, GainField k_minus = nullptr) {
   std::vector<double> v;
   for (const auto& r : recs) v.push_back(r.*k - (k_minus == nullptr ? 0.0 : r.*k_minus));
   const double n = static_cast<double>(v.size());
@@ -144,7 +144,7 @@ nlohmann::json point_json(const GainPoint& pt, const std::vector<ProposalGainRun
   for (const auto* fields : {implicit, standard}) {
     nlohmann::json c;
     for (std::size_t k = 0; k < 3; ++k) {
-      const auto [mean, se] = mean_se(recs, fields[k]);
+      const auto [mean, se] = paired_mean_se(recs, fields[k]);
       c[names[k]] = mean;
       c[std::string(names[k]) + "_se"] = se;
     }
@@ -152,7 +152,7 @@ nlohmann::json point_json(const GainPoint& pt, const std::vector<ProposalGainRun
   }
   // Paired differences, implicit minus bootstrap, over the same logs and seeds.
   for (std::size_t k = 0; k < 3; ++k) {
-    const auto [mean, se] = mean_se(recs, implicit[k], standard[k]);
+    const auto [mean, se] = paired_mean_se(recs, implicit[k], standard[k]);
     j["diff"][names[k]] = mean;
     j["diff"][std::string(names[k]) + "_se"] = se;
   }
@@ -193,7 +193,7 @@ nlohmann::json run_proposal_gain(const ProposalGainSettings& s, const RunContext
       "seed={} M={} runs={} duration={:a} ratio_dt={:a} dt_range_sd={:a} ratios={:a} dts={:a}",
       ctx.seed, s.particles, s.runs, s.duration, s.ratio_dt, s.dt_range_sd,
       fmt::join(s.ratios, ","), fmt::join(s.dts, ","));
-  Progress bar("proposal-gain", points.size() * runs, ctx.show_progress());
+  ProgressBar bar("proposal-gain", points.size() * runs, ctx.show_progress());
   // Run i is point i / runs, replicate i % runs; its seed depends on nothing else, so every
   // thread count gives the same records.
   const auto records =
@@ -228,4 +228,4 @@ nlohmann::json run_proposal_gain(const ProposalGainSettings& s, const RunContext
   return j;
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

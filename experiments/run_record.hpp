@@ -15,10 +15,10 @@
 //
 // From the table: the numbers that cross between ranks and go into the --resume files
 // (record_values / record_from_values, in the table's order), and the JSON by name
-// (record_json). A record file that `--resume` keeps in <out>/.resume/ (apps/parallel_runs.hpp)
-// is the run's key, the count, then one number per line in hexadecimal floating point (exact,
-// NaN and inf too). The file format is separate from parallel_runs.cpp so that the fuzz target
-// reads records alone.
+// (record_json). A record file that `--resume` keeps in <out>/.resume/
+// (experiments/parallel_runs.hpp) is the run's key, the count, then one number per line in
+// hexadecimal floating point (exact, NaN and inf too). The file format is separate from
+// parallel_runs.cpp so that the fuzz target reads records alone.
 
 #include <array>
 #include <cmath>
@@ -32,7 +32,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 /// A record's numbers as they travel: the fields in table order; a text field or a list is its
 /// length followed by its entries (characters as their codes). Only record_values and
@@ -152,4 +152,4 @@ std::string format_run_record(const std::string& key, const RecordValues& values
 /// text. At most 2^20 numbers: a bound, so that an edited count cannot exhaust memory.
 std::string parse_run_record(const std::string& text, const std::string& key, RecordValues& values);
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

@@ -1,4 +1,4 @@
-#include "run_record.hpp"
+#include "experiments/run_record.hpp"
 
 #include <cstdlib>
 #include <sstream>
@@ -7,7 +7,7 @@
 
 #include "implicit/core/error.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 std::string format_run_record(const std::string& key, const RecordValues& r) {
   std::string text = key + "\n" + fmt::format("{}\n", r.size());
@@ -45,4 +45,4 @@ std::string parse_run_record(const std::string& text, const std::string& key, Re
   return {};
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

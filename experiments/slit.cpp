@@ -12,14 +12,14 @@
 #include <fmt/format.h>
 #include <fmt/os.h>
 
-#include "experiments.hpp"
+#include "experiments/control.hpp"
+#include "experiments/parallel_runs.hpp"
+#include "experiments/slit_table.hpp"
 #include "implicit/control/double_slit.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
-#include "parallel_runs.hpp"
-#include "slit_table.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 namespace {
 
@@ -96,8 +96,8 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
       s.estimator == "generic" ? SlitImplementation::kGeneric : SlitImplementation::kWallSpace;
   SlitTable table;
   {
-    Progress progress(fmt::format("slit {} M={}", s.mode, s.samples),
-                      static_cast<std::size_t>(s.runs), ctx.show_progress());
+    ProgressBar progress(fmt::format("slit {} M={}", s.mode, s.samples),
+                         static_cast<std::size_t>(s.runs), ctx.show_progress());
     auto rows = distribute_runs(
         ctx, "slit",
         fmt::format("seed={} M={} mode={} estimator={}", ctx.seed, s.samples, s.mode, s.estimator),
@@ -164,4 +164,4 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
   };
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

@@ -17,17 +17,17 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "experiments.hpp"
+#include "experiments/landmark_slam.hpp"
+#include "experiments/parallel_runs.hpp"
+#include "experiments/tum_output.hpp"
+#include "experiments/vehicle.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/evaluate.hpp"
 #include "implicit/slam/slam_filter.hpp"
-#include "parallel_runs.hpp"
-#include "tum_output.hpp"
-#include "vehicle.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 namespace {
 
 double cpu_seconds() {
@@ -217,21 +217,10 @@ RunSummary from_record(const SlamRunRecord& r) {
   return out;
 }
 
-}  // namespace
-
-nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
-  const auto wall0 = std::chrono::steady_clock::now();
-  const slam::SlamMethod method = slam::parse_slam_method(s.method);
-  require(s.particles >= 1, "--particles: expected >= 1, got {}", s.particles);
-  require(s.datasets >= 1, "--datasets: expected >= 1, got {}", s.datasets);
-  require(s.truth == "paper" || s.truth == "consistent",
-          "--truth: expected paper|consistent, got '{}'", s.truth);
-  require(s.laser_every >= 1, "--laser-every: expected >= 1, got {}", s.laser_every);
-  const bool consistent = s.truth == "consistent";
-  const bool is_ekf = method == slam::SlamMethod::kEkf;
-  const int particles = is_ekf ? 1 : s.particles;
-
-  // Filter options (the same motion and sensor models as the data).
+/// The filters' options (the same motion and sensor models as the data); `particles` is 1 for
+/// the EKF.
+slam::SlamOptions filter_options(const SlamSettings& s, slam::SlamMethod method, int particles,
+                                 bool consistent) {
   slam::SlamOptions base;
   base.method = method;
   base.association = slam::parse_association(s.association);
@@ -251,53 +240,67 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   }
   if (s.gate_chi2 > 0.0) base.gate_chi2 = s.gate_chi2;
   if (s.new_landmark_density > 0.0) base.new_landmark_density = s.new_landmark_density;
-  const MotionNoise noise{s.control_sd, s.state_sd};
-  base.motion = ute_params(robot::RobotLog{}, noise, base.motion);
+  base.motion = ute_params(robot::RobotLog{}, MotionNoise{s.control_sd, s.state_sd}, base.motion);
   if (consistent) {
     const double f = std::sqrt(s.consistent_noise_scale);
     base.motion.control_std *= f;
     base.motion.state_std *= f;
   }
+  return base;
+}
 
-  // Data.
-  std::vector<slam::SlamDataset> logs;
+/// The data of the runs: logs (--data) or the synthetic scenario, and the vehicle they drive.
+struct SlamData {
+  std::vector<slam::SlamDataset> logs;  ///< empty: synthetic
   slam::SlamScenario scenario;
   std::string model = "ute";
+  bool vehicle_assumed = false;  ///< a log declared no vehicle
+};
+
+/// Resolves the vehicle model of the logs (one for all) and checks what the data allow.
+void resolve_log_model(const SlamSettings& s, SlamData& data) {
+  for (std::size_t k = 0; k < data.logs.size(); ++k) {
+    const std::string& declared = data.logs[k].vehicle_model;
+    const std::string m =
+        resolve_model("slam", s.model, declared.empty() ? std::nullopt : std::optional(declared),
+                      data.logs[k].name);
+    require(k == 0 || m == data.model,
+            "slam --data: expected logs of one vehicle, got '{}' and '{}'", data.model, m);
+    data.model = m;
+  }
+}
+
+SlamData load_slam_data(const SlamSettings& s, const RunContext& ctx) {
+  SlamData data;
   if (!s.data_dir.empty()) {
-    logs = load_logs(s.data_dir);
-    for (std::size_t k = 0; k < logs.size(); ++k) {
-      const std::string& declared = logs[k].vehicle_model;
-      const std::string m = resolve_model(
-          "slam", s.model, declared.empty() ? std::nullopt : std::optional(declared), logs[k].name);
-      require(k == 0 || m == model, "slam --data: expected logs of one vehicle, got '{}' and '{}'",
-              model, m);
-      model = m;
-    }
+    data.logs = load_logs(s.data_dir);
+    resolve_log_model(s, data);
   } else {
     require(s.model.empty() || s.model == "ute",
             "slam --model {}: the synthetic data are the Car Park's Ute; give a log of that "
             "vehicle with --data (implicit simulate --model {} writes one)",
             s.model, s.model);
-    scenario = slam::load_carpark_scenario(slam::default_data_dir());
+    data.scenario = slam::load_carpark_scenario(slam::default_data_dir());
     if (s.dense_landmarks > 0)
-      scenario = slam::make_dense_scenario(scenario, s.dense_laps, s.dense_landmarks, ctx.seed);
+      data.scenario =
+          slam::make_dense_scenario(data.scenario, s.dense_laps, s.dense_landmarks, ctx.seed);
   }
   // --control-noise is the Ute's P: on a unicycle it would be ignored, so it is refused there.
-  require(model != "unicycle" || s.control_noise == SlamSettings{}.control_noise,
+  require(data.model != "unicycle" || s.control_noise == SlamSettings{}.control_noise,
           "--control-noise {}: that is the Ute's control noise P = diag(p, p); the unicycle's is "
           "--control-sd V OMEGA (sd of v [m/s] and omega [rad/s])",
           s.control_noise);
   // Logs that declare no vehicle (neither record nor `# vehicle` comment) run as the Car Park's
   // Ute (or the --model given, with its defaults): said loudly, and recorded in the JSON.
-  bool vehicle_assumed = false;
-  for (const auto& d : logs) {
+  for (const auto& d : data.logs) {
     if (!d.vehicle_assumed) continue;
-    vehicle_assumed = true;
+    data.vehicle_assumed = true;
     warn_vehicle_assumed("slam", d.name,
-                         model == "ute" ? robot::declare_vehicle(d.vehicle)
-                                        : robot::VehicleDeclaration{model, {{"dt", d.vehicle.dt}}});
+                         data.model == "ute"
+                             ? robot::declare_vehicle(d.vehicle)
+                             : robot::VehicleDeclaration{data.model, {{"dt", d.vehicle.dt}}});
   }
-  for (const auto& d : logs)
+  for (const auto& d : data.logs)
     if (d.detections_unscheduled > 0) {
       robot::StepSchedule skipped;
       skipped.scans_skipped = d.scans_unscheduled;
@@ -305,16 +308,19 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
       warn_skipped_scans("slam", d.name, skipped, d.vehicle.dt);
     }
   // Refused before the runs: a truth file that cannot be written would cost the whole run.
+  const auto& logs = data.logs;
   if (!s.truth_trajectory.empty() && !logs.empty())
     require(!logs[0].truth.empty() && logs[0].truth_has_heading,
             "slam --truth-trajectory {}: {} has {}; a TUM file needs the full pose",
             s.truth_trajectory, logs[0].name,
             logs[0].truth.empty() ? "no truth" : "a truth of position fixes without heading");
-  const auto k_runs = static_cast<std::size_t>(s.datasets);
-  std::vector<RunSummary> runs(k_runs);
-  const double cpu0 = cpu_seconds();
-  // Data set i and its filter run depend only on i (seed + i), so the runs can be anywhere.
-  const std::string settings = fmt::format(
+  return data;
+}
+
+/// The settings the records depend on (parallel_runs.hpp: the key of --resume).
+std::string runs_key(const SlamSettings& s, const RunContext& ctx, int particles,
+                     const std::string& model) {
+  return fmt::format(
       "seed={} method={} M={} association={} truth={} laser_every={} noise_scale={:a} "
       "dense={}x{} min_range={:a} control_noise={:a} range_sd={:a} bearing_sd={:a} gate={:a} "
       "p0={:a} data={} model={} control_sd={:a} state_sd={:a}",
@@ -322,83 +328,50 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
       s.consistent_noise_scale, s.dense_landmarks, s.dense_laps, s.min_range, s.control_noise,
       s.range_sd, s.bearing_sd_deg, s.gate_chi2, s.new_landmark_density, s.data_dir, model,
       fmt::join(s.control_sd, ","), fmt::join(s.state_sd, ","));
-  auto dataset = [&](std::size_t i) {
-    if (!logs.empty()) return logs[i % logs.size()];
-    slam::SyntheticConfig cfg;
-    cfg.truth = consistent ? slam::TruthMode::kConsistent : slam::TruthMode::kPaper;
-    cfg.laser_every = s.laser_every;
-    cfg.motion = base.motion;
-    return slam::generate_synthetic(scenario, cfg, ctx.seed + i);
-  };
-  // Progress counts steps, not runs: a single long run (Victoria Park, about a minute) moves too.
-  std::size_t total_steps = 0;
-  for (std::size_t i = 0; i < k_runs; ++i)
-    total_steps += logs.empty() ? 0 : logs[i % logs.size()].steps();
-  if (logs.empty()) total_steps = k_runs * dataset(0).steps();  // one scenario: equal lengths
-  Progress bar(fmt::format("SLAM {} M={} steps", s.method, particles), total_steps,
-               ctx.show_progress());
-  const auto records = distribute_runs(ctx, "slam", settings, k_runs, [&](std::size_t i) {
-    const slam::SlamDataset data = dataset(i);
-    slam::SlamOptions opt = base;
-    opt.seed = ctx.seed + i;
-    opt.motion.dt = data.vehicle.dt;
-    opt.motion.wheelbase = data.vehicle.wheelbase;
-    opt.motion.encoder_offset = data.vehicle.encoder_offset;
-    opt.motion.laser_forward = data.vehicle.laser_forward;
-    opt.motion.laser_left = data.vehicle.laser_left;
-    if (model == "unicycle") {
-      robot::UnicycleParams p;
-      p.dt = data.vehicle.dt;
-      opt.model = robot::UnicycleModel(unicycle_params(robot::RobotLog{}, noise, p));
-    }
-    const slam::SlamRun run = slam::run_filter(data, opt, false, [&bar] { bar.tick(); });
-    return to_record(data, run, slam::evaluate(data, run), consistent, i == 0);
-  });
-  for (std::size_t i = 0; i < k_runs; ++i) runs[i] = from_record(records[i]);
-  bar.finish();
-  const double cpu = cpu_seconds() - cpu0;
-  const slam::SlamDataset data0 = dataset(0);  // the data of the run the CSV files show
+}
 
+/// The per-run values the JSON and the CSV files summarise.
+struct SlamColumns {
   std::vector<double> err, err_al, rmse_p, rmse_pa, rmse_h, rmse_m, shape, ess, res, nees, lms,
       mapbytes, newton;
   std::size_t steps = 0, skipped = 0, scored_min = std::numeric_limits<std::size_t>::max();
-  for (std::size_t i = 0; i < k_runs; ++i) {
-    const auto& m = runs[i].metrics;
-    const auto& st = runs[i].run.stats;
-    err.push_back(m.error_percent);
-    err_al.push_back(m.error_aligned_percent);
-    rmse_p.push_back(m.rmse_pose_m);
-    rmse_pa.push_back(m.rmse_pose_aligned_m);
-    rmse_h.push_back(m.rmse_heading_rad);
-    rmse_m.push_back(m.rmse_map_m);
-    shape.push_back(m.map_shape_m);
-    ess.push_back(st.mean_ess_fraction());
-    res.push_back(static_cast<double>(st.resamplings));
-    nees.push_back(m.nees_mean);
-    lms.push_back(static_cast<double>(m.landmarks));
-    mapbytes.push_back(static_cast<double>(runs[i].run.map_bytes));
+};
+
+SlamColumns columns_of(const std::vector<RunSummary>& runs) {
+  SlamColumns c;
+  for (const RunSummary& r : runs) {
+    const auto& m = r.metrics;
+    const auto& st = r.run.stats;
+    c.err.push_back(m.error_percent);
+    c.err_al.push_back(m.error_aligned_percent);
+    c.rmse_p.push_back(m.rmse_pose_m);
+    c.rmse_pa.push_back(m.rmse_pose_aligned_m);
+    c.rmse_h.push_back(m.rmse_heading_rad);
+    c.rmse_m.push_back(m.rmse_map_m);
+    c.shape.push_back(m.map_shape_m);
+    c.ess.push_back(st.mean_ess_fraction());
+    c.res.push_back(static_cast<double>(st.resamplings));
+    c.nees.push_back(m.nees_mean);
+    c.lms.push_back(static_cast<double>(m.landmarks));
+    c.mapbytes.push_back(static_cast<double>(r.run.map_bytes));
     if (st.newton_solves > 0)
-      newton.push_back(static_cast<double>(st.newton_iterations) /
-                       static_cast<double>(st.newton_solves));
-    steps += runs[i].steps;
-    skipped += st.skipped;
-    scored_min = std::min(scored_min, m.scored_steps);
+      c.newton.push_back(static_cast<double>(st.newton_iterations) /
+                         static_cast<double>(st.newton_solves));
+    c.steps += r.steps;
+    c.skipped += st.skipped;
+    c.scored_min = std::min(c.scored_min, m.scored_steps);
   }
-  nlohmann::json j;
-  j["method"] = s.method;
-  j["particles"] = particles;
-  j["datasets"] = s.datasets;
-  j["association"] = s.association;
-  j["truth"] = logs.empty() ? s.truth : "log";
-  j["data"] =
-      logs.empty() ? (s.dense_landmarks > 0 ? scenario.name : "carpark-synthetic") : data0.name;
-  j["model"] = model;
-  j["vehicle_assumed"] = vehicle_assumed;
-  j["laser_every"] = s.laser_every;
-  // The filter's model, so that a run on real data can be repeated from its JSON alone.
-  // The motion noise the filter used (unicycle: its own; --control-noise is the Ute's only).
+  return c;
+}
+
+/// The filter's model, so that a run on real data can be repeated from its JSON alone: the
+/// motion noise the filter used (unicycle: its own; --control-noise is the Ute's only) and its
+/// laser model.
+void add_model_json(nlohmann::json& j, const SlamSettings& s, const std::string& model,
+                    const slam::SlamOptions& base) {
   if (model == "unicycle") {
-    const robot::UnicycleParams up = unicycle_params(robot::RobotLog{}, noise, {});
+    const robot::UnicycleParams up =
+        unicycle_params(robot::RobotLog{}, MotionNoise{s.control_sd, s.state_sd}, {});
     j["control_noise"] = nullptr;
     j["control_sd"] = {up.control_std(0), up.control_std(1)};
     j["state_sd"] = {up.state_std(0), up.state_std(1), up.state_std(2)};
@@ -411,95 +384,182 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["bearing_sd_deg"] = std::sqrt(base.sensor.noise_covariance()(1, 1)) * 180.0 / kPi;
   j["gate_chi2"] = base.gate_chi2;
   j["new_landmark_density"] = base.new_landmark_density;
+}
+
+/// The means and spreads over the runs (null for the EKF's particle statistics).
+void add_metrics_json(nlohmann::json& j, const SlamColumns& c, bool is_ekf) {
+  j["error_percent_mean"] = mean(c.err);
+  j["error_percent_std"] = stddev(c.err);
+  j["error_percent_median"] = median(c.err);
+  j["error_aligned_percent_mean"] = mean(c.err_al);
+  j["error_aligned_percent_std"] = stddev(c.err_al);
+  j["map_shape_m"] = mean(c.shape);
+  j["map_shape_m_std"] = stddev(c.shape);
+  j["ess_mean"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(c.ess));
+  j["resamplings"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(c.res));
+  j["ess_std"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(stddev(c.ess));
+  j["resamplings_std"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(stddev(c.res));
+  j["rmse_pose_m"] = mean(c.rmse_p);
+  j["rmse_pose_m_std"] = stddev(c.rmse_p);
+  j["rmse_pose_aligned_m"] = mean(c.rmse_pa);
+  j["rmse_heading_rad"] = mean(c.rmse_h);
+  j["rmse_map_m"] = mean(c.rmse_m);
+  j["rmse_map_m_std"] = stddev(c.rmse_m);
+  j["landmarks_mean"] = mean(c.lms);
+  j["map_bytes_mean"] = mean(c.mapbytes);
+  if (!c.newton.empty()) j["newton_iterations_per_update"] = mean(c.newton);
+}
+
+/// NEES (only meaningful when the truth follows the filter's model): the mean, and the per-step
+/// average over the K runs against [chi2_3K(.025)/K, chi2_3K(.975)/K] (spec §4).
+void add_nees_json(nlohmann::json& j, const SlamColumns& c, const std::vector<RunSummary>& runs,
+                   std::size_t n_steps) {
+  j["nees_mean"] = mean(c.nees);
+  const double kk = static_cast<double>(runs.size());
+  const double lo = slam::chi_square_quantile(0.025, 3 * kk) / kk;
+  const double hi = slam::chi_square_quantile(0.975, 3 * kk) / kk;
+  std::size_t inside = 0, total = 0;
+  for (std::size_t n = 1; n <= n_steps; ++n) {
+    double sum = 0.0;
+    bool ok = true;
+    for (std::size_t i = 0; i < runs.size() && ok; ++i) {
+      const auto& v = runs[i].metrics.nees;
+      ok = n < v.size() && std::isfinite(v[n]);
+      if (ok) sum += v[n];
+    }
+    if (!ok) continue;
+    ++total;
+    if (sum / kk >= lo && sum / kk <= hi) ++inside;
+  }
+  j["nees_band"] = {lo, hi};
+  j["nees_fraction_in_band"] =
+      total > 0 ? static_cast<double>(inside) / static_cast<double>(total) : 0.0;
+}
+
+/// slam_<method>_M<particles>_{path,map,runs}.csv and the appended row of slam_summary.csv.
+void write_slam_csv(const SlamSettings& s, const RunContext& ctx, int particles,
+                    const nlohmann::json& j, const SlamColumns& c, const slam::SlamDataset& data0,
+                    const std::vector<RunSummary>& runs, bool is_ekf) {
+  const std::string stem = fmt::format("slam_{}_M{}", s.method, particles);
+  write_csv_outputs(ctx, stem, data0, runs[0].run);
+  {
+    OutputFile file(ctx.csv_path(stem + "_runs.csv"));
+    std::ostream& os = file.stream();
+    os << "dataset,seed,error_percent,error_aligned_percent,rmse_pose_m,rmse_map_m,map_shape_m,"
+          "ess_mean,resamplings,landmarks,nees_mean,wall_ms_per_step\n";
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      os << fmt::format("{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{:.6g},{:.6g}\n",
+                        runs[i].name, ctx.seed + i, c.err[i], c.err_al[i], c.rmse_p[i], c.rmse_m[i],
+                        c.shape[i], c.ess[i], c.res[i], c.lms[i], c.nees[i],
+                        1e3 * runs[i].run.wall_seconds / static_cast<double>(runs[i].steps));
+    file.commit();
+  }
+  OutputFile summary(ctx.csv_path("slam_summary.csv"), OutputFile::Mode::kAppend);
+  std::ostream& os = summary.stream();
+  if (summary.fresh())
+    os << "method,particles,datasets,association,truth,error_percent_mean,error_percent_std,"
+          "error_aligned_percent_mean,map_shape_m,rmse_pose_m,rmse_map_m,ess_mean,resamplings,"
+          "cpu_ms_per_step,peak_memory_mb\n";
+  os << fmt::format(
+      "{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},"
+      "{:.6g},{:.6g}\n",
+      s.method, particles, s.datasets, s.association, j["truth"].get<std::string>(), mean(c.err),
+      stddev(c.err), mean(c.err_al), mean(c.shape), mean(c.rmse_p), mean(c.rmse_m),
+      is_ekf ? 1.0 : mean(c.ess), is_ekf ? 0.0 : mean(c.res), j["cpu_ms_per_step"].get<double>(),
+      peak_memory_mb());
+  summary.commit();
+}
+
+}  // namespace
+
+nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  const slam::SlamMethod method = slam::parse_slam_method(s.method);
+  require(s.particles >= 1, "--particles: expected >= 1, got {}", s.particles);
+  require(s.datasets >= 1, "--datasets: expected >= 1, got {}", s.datasets);
+  require(s.truth == "paper" || s.truth == "consistent",
+          "--truth: expected paper|consistent, got '{}'", s.truth);
+  require(s.laser_every >= 1, "--laser-every: expected >= 1, got {}", s.laser_every);
+  const bool consistent = s.truth == "consistent";
+  const bool is_ekf = method == slam::SlamMethod::kEkf;
+  const int particles = is_ekf ? 1 : s.particles;
+  const slam::SlamOptions base = filter_options(s, method, particles, consistent);
+  const SlamData data = load_slam_data(s, ctx);
+  const auto& logs = data.logs;
+  const MotionNoise noise{s.control_sd, s.state_sd};
+
+  const auto k_runs = static_cast<std::size_t>(s.datasets);
+  std::vector<RunSummary> runs(k_runs);
+  const double cpu0 = cpu_seconds();
+  // Data set i and its filter run depend only on i (seed + i), so the runs can be anywhere.
+  auto dataset = [&](std::size_t i) {
+    if (!logs.empty()) return logs[i % logs.size()];
+    slam::SyntheticConfig cfg;
+    cfg.truth = consistent ? slam::TruthMode::kConsistent : slam::TruthMode::kPaper;
+    cfg.laser_every = s.laser_every;
+    cfg.motion = base.motion;
+    return slam::generate_synthetic(data.scenario, cfg, ctx.seed + i);
+  };
+  // Progress counts steps, not runs: a single long run (Victoria Park, about a minute) moves too.
+  std::size_t total_steps = 0;
+  for (std::size_t i = 0; i < k_runs; ++i)
+    total_steps += logs.empty() ? 0 : logs[i % logs.size()].steps();
+  if (logs.empty()) total_steps = k_runs * dataset(0).steps();  // one scenario: equal lengths
+  ProgressBar bar(fmt::format("SLAM {} M={} steps", s.method, particles), total_steps,
+                  ctx.show_progress());
+  const auto records = distribute_runs(
+      ctx, "slam", runs_key(s, ctx, particles, data.model), k_runs, [&](std::size_t i) {
+        const slam::SlamDataset d = dataset(i);
+        slam::SlamOptions opt = base;
+        opt.seed = ctx.seed + i;
+        opt.motion.dt = d.vehicle.dt;
+        opt.motion.wheelbase = d.vehicle.wheelbase;
+        opt.motion.encoder_offset = d.vehicle.encoder_offset;
+        opt.motion.laser_forward = d.vehicle.laser_forward;
+        opt.motion.laser_left = d.vehicle.laser_left;
+        if (data.model == "unicycle") {
+          robot::UnicycleParams p;
+          p.dt = d.vehicle.dt;
+          opt.model = robot::UnicycleModel(unicycle_params(robot::RobotLog{}, noise, p));
+        }
+        const slam::SlamRun run = slam::run_filter(d, opt, false, [&bar] { bar.tick(); });
+        return to_record(d, run, slam::evaluate(d, run), consistent, i == 0);
+      });
+  for (std::size_t i = 0; i < k_runs; ++i) runs[i] = from_record(records[i]);
+  bar.finish();
+  const double cpu = cpu_seconds() - cpu0;
+  const slam::SlamDataset data0 = dataset(0);  // the data of the run the CSV files show
+  const SlamColumns c = columns_of(runs);
+
+  nlohmann::json j;
+  j["method"] = s.method;
+  j["particles"] = particles;
+  j["datasets"] = s.datasets;
+  j["association"] = s.association;
+  j["truth"] = logs.empty() ? s.truth : "log";
+  j["data"] = logs.empty() ? (s.dense_landmarks > 0 ? data.scenario.name : "carpark-synthetic")
+                           : data0.name;
+  j["model"] = data.model;
+  j["vehicle_assumed"] = data.vehicle_assumed;
+  j["laser_every"] = s.laser_every;
+  add_model_json(j, s, data.model, base);
   j["seed"] = ctx.seed;
-  j["error_percent_mean"] = mean(err);
-  j["error_percent_std"] = stddev(err);
-  j["error_percent_median"] = median(err);
-  j["error_aligned_percent_mean"] = mean(err_al);
-  j["error_aligned_percent_std"] = stddev(err_al);
-  j["map_shape_m"] = mean(shape);
-  j["map_shape_m_std"] = stddev(shape);
-  j["ess_mean"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(ess));
-  j["resamplings"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(mean(res));
-  j["ess_std"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(stddev(ess));
-  j["resamplings_std"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(stddev(res));
-  j["rmse_pose_m"] = mean(rmse_p);
-  j["rmse_pose_m_std"] = stddev(rmse_p);
-  j["rmse_pose_aligned_m"] = mean(rmse_pa);
-  j["rmse_heading_rad"] = mean(rmse_h);
-  j["rmse_map_m"] = mean(rmse_m);
-  j["rmse_map_m_std"] = stddev(rmse_m);
-  j["landmarks_mean"] = mean(lms);
+  add_metrics_json(j, c, is_ekf);
   // Below min_range (per run, summed), and never scheduled (the log's, once per run).
   j["detections_skipped"] =
-      skipped + static_cast<std::size_t>(data0.detections_unscheduled) * k_runs;
+      c.skipped + static_cast<std::size_t>(data0.detections_unscheduled) * k_runs;
   j["detections_unscheduled"] = data0.detections_unscheduled;
-  j["map_bytes_mean"] = mean(mapbytes);
-  if (!newton.empty()) j["newton_iterations_per_update"] = mean(newton);
-  // NEES only means something when the truth follows the filter's model.
-  if (consistent) {
-    j["nees_mean"] = mean(nees);
-    // Per-step average over the K runs against [chi2_3K(.025)/K, chi2_3K(.975)/K] (spec §4).
-    const double kk = static_cast<double>(k_runs);
-    const double lo = slam::chi_square_quantile(0.025, 3 * kk) / kk;
-    const double hi = slam::chi_square_quantile(0.975, 3 * kk) / kk;
-    std::size_t inside = 0, total = 0;
-    const std::size_t n_steps = data0.steps();
-    for (std::size_t n = 1; n <= n_steps; ++n) {
-      double sum = 0.0;
-      bool ok = true;
-      for (std::size_t i = 0; i < k_runs && ok; ++i) {
-        const auto& v = runs[i].metrics.nees;
-        ok = n < v.size() && std::isfinite(v[n]);
-        if (ok) sum += v[n];
-      }
-      if (!ok) continue;
-      ++total;
-      if (sum / kk >= lo && sum / kk <= hi) ++inside;
-    }
-    j["nees_band"] = {lo, hi};
-    j["nees_fraction_in_band"] =
-        total > 0 ? static_cast<double>(inside) / static_cast<double>(total) : 0.0;
-  }
-  j["cpu_ms_per_step"] = 1e3 * cpu / static_cast<double>(steps);
+  if (consistent) add_nees_json(j, c, runs, data0.steps());
+  j["cpu_ms_per_step"] = 1e3 * cpu / static_cast<double>(c.steps);
   j["steps_per_dataset"] = data0.steps();
-  j["scored_steps_min"] = scored_min;  // over the data sets; 0: a run had no step with truth
+  j["scored_steps_min"] = c.scored_min;  // over the data sets; 0: a run had no step with truth
   j["peak_memory_mb"] = peak_memory_mb();
   j["threads"] = active_threads();
   j["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
 
   if (rank_index() == 0) write_slam_tum_files(s, data0, runs[0].run);
-  if (!ctx.out_dir.empty()) {
-    const std::string stem = fmt::format("slam_{}_M{}", s.method, particles);
-    write_csv_outputs(ctx, stem, data0, runs[0].run);
-    {
-      OutputFile file(ctx.csv_path(stem + "_runs.csv"));
-      std::ostream& os = file.stream();
-      os << "dataset,seed,error_percent,error_aligned_percent,rmse_pose_m,rmse_map_m,map_shape_m,"
-            "ess_mean,resamplings,landmarks,nees_mean,wall_ms_per_step\n";
-      for (std::size_t i = 0; i < k_runs; ++i)
-        os << fmt::format("{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{:.6g},{:.6g}\n",
-                          runs[i].name, ctx.seed + i, err[i], err_al[i], rmse_p[i], rmse_m[i],
-                          shape[i], ess[i], res[i], lms[i], nees[i],
-                          1e3 * runs[i].run.wall_seconds / static_cast<double>(runs[i].steps));
-      file.commit();
-    }
-    OutputFile summary(ctx.csv_path("slam_summary.csv"), OutputFile::Mode::kAppend);
-    std::ostream& os = summary.stream();
-    if (summary.fresh())
-      os << "method,particles,datasets,association,truth,error_percent_mean,error_percent_std,"
-            "error_aligned_percent_mean,map_shape_m,rmse_pose_m,rmse_map_m,ess_mean,resamplings,"
-            "cpu_ms_per_step,peak_memory_mb\n";
-    os << fmt::format(
-        "{},{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},"
-        "{:.6g},{:.6g}\n",
-        s.method, particles, s.datasets, s.association, j["truth"].get<std::string>(), mean(err),
-        stddev(err), mean(err_al), mean(shape), mean(rmse_p), mean(rmse_m),
-        is_ekf ? 1.0 : mean(ess), is_ekf ? 0.0 : mean(res), j["cpu_ms_per_step"].get<double>(),
-        peak_memory_mb());
-    summary.commit();
-  }
+  if (!ctx.out_dir.empty()) write_slam_csv(s, ctx, particles, j, c, data0, runs, is_ekf);
   return j;
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

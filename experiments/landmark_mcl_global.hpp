@@ -2,12 +2,12 @@
 // `implicit mcl --init global` and `--kidnap-at`: the runs of exp_mcl_global.cpp.
 #include <nlohmann/json.hpp>
 
-#include "experiments.hpp"
+#include "experiments/landmark_mcl.hpp"
 #include "implicit/filter/localization.hpp"
 #include "implicit/robot/unicycle_model.hpp"
 #include "implicit/robot/ute_model.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 /// Refuses settings a global or kidnapping run cannot honour (before any data is loaded).
 void check_global_settings(const MclSettings& s);
@@ -27,4 +27,4 @@ nlohmann::json run_mcl_global(const MclSettings& s, const RunContext& ctx,
                               const robot::RangeBearingSensor& sensor,
                               const filter::LocalizationProblem& problem);
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

@@ -10,13 +10,13 @@
 #include <fmt/format.h>
 #include <fmt/os.h>
 
-#include "experiments.hpp"
+#include "experiments/control.hpp"
+#include "experiments/parallel_runs.hpp"
 #include "implicit/control/himmelblau.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
-#include "parallel_runs.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 namespace {
 
 HimmelblauRunRecord to_record(const control::HimmelblauRun& run) {
@@ -58,7 +58,8 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
 
   std::vector<control::HimmelblauRun> runs(static_cast<std::size_t>(s.runs));
   {
-    Progress progress(fmt::format("himmelblau M={}", s.samples), runs.size(), ctx.show_progress());
+    ProgressBar progress(fmt::format("himmelblau M={}", s.samples), runs.size(),
+                         ctx.show_progress());
     const auto records = distribute_runs(
         ctx, "himmelblau", fmt::format("seed={} M={}", ctx.seed, s.samples), runs.size(),
         [&](std::size_t r) {
@@ -169,4 +170,4 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
   };
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

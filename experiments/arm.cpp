@@ -6,11 +6,11 @@
 #include <fmt/format.h>
 #include <fmt/os.h>
 
-#include "experiments.hpp"
+#include "experiments/control.hpp"
 #include "implicit/control/robot_arm.hpp"
 #include "implicit/core/error.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 nlohmann::json run_arm(const ArmSettings& s, const RunContext& ctx) {
   const auto start = std::chrono::steady_clock::now();
@@ -66,4 +66,4 @@ nlohmann::json run_arm(const ArmSettings& s, const RunContext& ctx) {
   };
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments

@@ -6,9 +6,9 @@
 #include <numeric>
 #include <vector>
 
-#include "run_record.hpp"
+#include "experiments/run_record.hpp"
 
-namespace implicit::app {
+namespace implicit::experiments {
 
 inline double mean_of(const std::vector<double>& v) {
   return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
@@ -36,4 +36,4 @@ inline double median_of_finite(std::vector<double> v) {
   return v.empty() ? std::nan("") : median_of(std::move(v));
 }
 
-}  // namespace implicit::app
+}  // namespace implicit::experiments
