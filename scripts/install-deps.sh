@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libtbb-dev libcli11-dev nlohmann-json3-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev librandom123-dev pybind11-dev
   python3 python3-dev python3-numpy python3-matplotlib python3-pytest zlib1g-dev
+  python3-pip python3-venv python3-setuptools python3-wheel  # pip install (pyproject.toml, setup.py)
   clang-14 libclang-rt-14-dev  # make test-sanitize, make fuzz-smoke: clang++ 14, ASan, UBSan, libFuzzer
   libopenmpi-dev openmpi-bin  # the MPI build (docs/cluster.md)
   libyaml-cpp-dev  # ROS map_server map files (robot/map_io.cpp)
