@@ -6,6 +6,7 @@
 
 #include "implicit/core/jet.hpp"
 #include "implicit/core/rng.hpp"
+#include "implicit/filter/mcl_objective.hpp"
 #include "implicit/robot/ute_model.hpp"
 #include "implicit/slam/proposals.hpp"
 
@@ -39,17 +40,28 @@ void expect_rel(const Eigen::Matrix<double, N, 1>& got, const std::vector<double
   for (int i = 0; i < N; ++i) expect_rel(got(i), want[static_cast<std::size_t>(i)], rel, what);
 }
 
+// F of spec §3.7 without its constant: the filter layer's pose objective that implicit SLAM uses
+// (set_pose_objective), one term per landmark with the information S^-1 of its own S.
+struct Term {
+  Vec<2> landmark;
+  Vec<2> z;
+  Mat<2> s;
+};
+PoseObjective<> objective(const Common& c, const std::vector<Term>& terms) {
+  PoseObjective<> F;
+  const Mat<3> precision = c.sigma1.llt().solve(Mat<3>::Identity());
+  F.reset(c.sensor, Mat<2>::Identity(), c.f, 0.5 * (precision + precision.transpose()), 0.0);
+  for (const Term& t : terms) EXPECT_TRUE(F.add(t.landmark, t.z, t.s.inverse()));
+  return F;
+}
+
 TEST(PoseObjective, CaseAOracle) {
   const Common c;
-  LandmarkTerm t;
-  ASSERT_TRUE(
-      t.set(Vec<2>(20, 12), Vec<2>(12.1682955572, 1.8806599794), c.sensor.noise_covariance()));
-  const std::vector<LandmarkTerm> terms{t};
-  const PoseObjective F(c.f, c.sigma1, terms);
-  ASSERT_TRUE(F.ok());
+  const PoseObjective<> F = objective(
+      c, {{Vec<2>(20, 12), Vec<2>(12.1682955572, 1.8806599794), c.sensor.noise_covariance()}});
   Vec<3> g;
   Mat<3> h, hgn;
-  const double v = F.evaluate(c.f, g, h, hgn);
+  const double v = F.evaluate(c.f, &g, &h, &hgn);
   expect_rel(v, 0.014014336680, 1e-8, "F(f)");
   // The oracle's z is rounded to 1e-10; the gradient amplifies that by up to |J^T Sigma2^-1| ~
   // 1/sigma2 = 1146 (bearing), so gradients at Case A agree to ~6e-8 only: tolerance 2e-7.
@@ -61,35 +73,36 @@ TEST(PoseObjective, CaseAOracle) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) expect_rel(h(i, j), want_h[i][j], 1e-8, "hess F(f)");
   const Vec<3> x2 = c.f + Vec<3>(0.2, -0.1, 0.01);
-  expect_rel(F.evaluate(x2, g, h, hgn), 76.093242330183, 1e-8, "F(f + d)");
+  expect_rel(F.evaluate(x2, &g, &h, &hgn), 76.093242330183, 1e-8, "F(f + d)");
   const Vec<3> want_g2(253.5311514905, -723.3752344939, 2903.9233431589);
   EXPECT_LT((g - want_g2).cwiseAbs().maxCoeff(), 2e-7);
-  const PoseMinimum lp = newton_minimize<SmallFactor<3>>(F, c.f, pose_newton_options(50, 1e-24));
-  ASSERT_TRUE(pose_minimum_usable(lp) && lp.converged());
+  const filter::PoseMinimum lp =
+      newton_minimize<SmallFactor<3>>(F, c.f, pose_newton_options(50, 1e-24));
+  ASSERT_TRUE(filter::usable(lp) && lp.converged());
   expect_rel<3>(lp.x, {10.0667353158, 5.028063506, 0.3018870747}, 1e-9, "minimiser");
-  expect_rel(F.value(lp.x), 0.011911716008, 1e-8, "phi");
+  expect_rel(F.evaluate(lp.x), 0.011911716008, 1e-8, "phi");
   expect_rel(lp.factor.log_det_L(), 10.545986532115, 1e-9, "log det L");
   EXPECT_NEAR(lp.factor.matrixL()(1, 0), -47.874846178, 1e-7);
 }
 
 TEST(PoseObjective, CaseBOracleTwoLandmarks) {
   const Common c;
-  std::vector<LandmarkTerm> terms(2);
-  ASSERT_TRUE(terms[0].set(Vec<2>(20, 12), Vec<2>(12.3, 1.85), c.sensor.noise_covariance()));
-  ASSERT_TRUE(terms[1].set(Vec<2>(11, 17), Vec<2>(12.1, 2.74), c.sensor.noise_covariance()));
-  const PoseObjective F(c.f, c.sigma1, terms);
+  const PoseObjective<> F =
+      objective(c, {{Vec<2>(20, 12), Vec<2>(12.3, 1.85), c.sensor.noise_covariance()},
+                    {Vec<2>(11, 17), Vec<2>(12.1, 2.74), c.sensor.noise_covariance()}});
   const Vec<3> xt = c.f + Vec<3>(0.1, -0.05, 0.02);
   Vec<3> g;
   Mat<3> h, hgn;
-  expect_rel(F.evaluate(xt, g, h, hgn), 47.977334867179, 1e-8, "F(x_t)");
+  expect_rel(F.evaluate(xt, &g, &h, &hgn), 47.977334867179, 1e-8, "F(x_t)");
   expect_rel<3>(g, {198.8364716097, -575.5285795415, 2279.2775630361}, 1e-8, "grad");
   expect_rel(h(0, 0), 512.1047008408, 1e-8, "H11");
   expect_rel(h(0, 1), -1074.0587112778, 1e-8, "H12");
   expect_rel(h(2, 2), 59362.4369230944, 1e-8, "H33");
-  const PoseMinimum lp = newton_minimize<SmallFactor<3>>(F, c.f, pose_newton_options(50, 1e-24));
-  ASSERT_TRUE(pose_minimum_usable(lp));
+  const filter::PoseMinimum lp =
+      newton_minimize<SmallFactor<3>>(F, c.f, pose_newton_options(50, 1e-24));
+  ASSERT_TRUE(filter::usable(lp));
   expect_rel<3>(lp.x, {10.0180469054, 5.0788693051, 0.3187026551}, 1e-9, "minimiser");
-  expect_rel(F.value(lp.x), 0.543789188458, 1e-8, "phi");
+  expect_rel(F.evaluate(lp.x), 0.543789188458, 1e-8, "phi");
   expect_rel(lp.factor.log_det_L(), 10.869741220601, 1e-9, "log det L");
 }
 
@@ -100,10 +113,9 @@ TEST(PoseObjective, GradientAndHessianMatchAutodiffWithFullCovariance) {
   const Common c;
   Mat<2> s;
   s << 0.09, 0.004, 0.004, 0.002;
-  std::vector<LandmarkTerm> terms(2);
-  ASSERT_TRUE(terms[0].set(Vec<2>(20, 12), Vec<2>(12.3, 1.85), s));
-  ASSERT_TRUE(terms[1].set(Vec<2>(11, 17), Vec<2>(12.1, 2.74), s));
-  const PoseObjective F(c.f, c.sigma1, terms);
+  const std::vector<Term> terms = {{Vec<2>(20, 12), Vec<2>(12.3, 1.85), s},
+                                   {Vec<2>(11, 17), Vec<2>(12.1, 2.74), s}};
+  const PoseObjective<> F = objective(c, terms);
   const Mat<2> s_inv = s.inverse();  // test only: explicit inverse as an independent oracle
   const Mat<3> p1 = c.sigma1.inverse();
   auto functor = [&](const auto& x) {
@@ -128,12 +140,51 @@ TEST(PoseObjective, GradientAndHessianMatchAutodiffWithFullCovariance) {
     const Vec<3> x = c.f + 0.2 * rng.normal_vector<3>().cwiseProduct(Vec<3>(1, 1, 0.1));
     Vec<3> g;
     Mat<3> h, hgn;
-    const double v = F.evaluate(x, g, h, hgn);
+    const double v = F.evaluate(x, &g, &h, &hgn);
     const auto [va, ga, ha] = autodiff_hessian<3>(functor, x);
     EXPECT_NEAR(v, va, 1e-10 * (1 + std::abs(va)));
     EXPECT_LT((g - ga).norm(), 1e-9 * (1 + ga.norm()));
     EXPECT_LT((h - ha).norm(), 1e-9 * (1 + ha.norm()));
   }
+}
+
+// set_pose_objective builds F with its constant: 1/2 log det(2 pi Sigma1) + sum_i 1/2 log det(2
+// pi S_i), S_i = Sigma2 for (A) and H_m P_i H_m^T + Sigma2 at f for (B) (closed forms here).
+TEST(PoseObjective, SetPoseObjectiveHasTheConstantAndTheTermsOfAAndB) {
+  const Common c;
+  const Eigen::LLT<Mat<3>> llt1(c.sigma1);
+  std::vector<KnownLandmark> known(2);
+  known[0].mean = Vec<2>(20, 12);
+  known[0].z = Vec<2>(12.3, 1.85);
+  known[0].cov << 0.5, 0.1, 0.1, 0.3;
+  known[1].mean = Vec<2>(11, 17);
+  known[1].z = Vec<2>(12.1, 2.74);
+  known[1].cov << 0.2, 0.0, 0.0, 0.2;
+  const Vec<3> x = c.f + Vec<3>(0.1, -0.05, 0.02);
+  for (bool point : {true, false}) {
+    PoseObjective<> F;
+    ASSERT_TRUE(set_pose_objective(F, c.sensor, c.f, llt1, known, point));
+    std::vector<Term> terms;
+    double constant = 0.5 * std::log((2.0 * kPi * c.sigma1).determinant());
+    for (const KnownLandmark& k : known) {
+      Mat<2> s = c.sensor.noise_covariance();
+      if (!point) {
+        const Mat<2> hm = c.sensor.jacobian_landmark(c.f, k.mean);
+        s += hm * k.cov * hm.transpose();
+      }
+      terms.push_back({k.mean, k.z, s});
+      constant += 0.5 * std::log((2.0 * kPi * s).determinant());
+    }
+    EXPECT_NEAR(F.constant(), constant, 1e-12 * std::abs(constant)) << point;
+    const double want = objective(c, terms).evaluate(x) + constant;
+    EXPECT_NEAR(F.evaluate(x), want, 1e-12 * std::abs(want)) << point;
+  }
+  // More landmarks than the objective holds, or an S that is not SPD: refused.
+  std::vector<KnownLandmark> many(kMaxKnownPerStep + 1, known[0]);
+  PoseObjective<> F;
+  EXPECT_FALSE(set_pose_objective(F, c.sensor, c.f, llt1, many, true));
+  known[0].cov << 1.0, 0.0, 0.0, -1e9;
+  EXPECT_FALSE(set_pose_objective(F, c.sensor, c.f, llt1, known, false));
 }
 
 TEST(NewLandmarkObjective, CaseCOracle) {

@@ -45,11 +45,11 @@ using robot::Mat3;
 using robot::Measurement;
 using robot::Pose;
 
-template <robot::LandmarkSensor Sensor>
+template <robot::LandmarkSensor Sensor, int MaxTerms = robot::kMaxDetectionsPerStep>
 class MclObjective {
  public:
   /// Detections per update (the Car Park has at most 6): what the landmark model accepts.
-  static constexpr int kMaxTerms = robot::kMaxDetectionsPerStep;
+  static constexpr int kMaxTerms = MaxTerms;
 
   /// Starts a new F: prior N(prediction, prior_information^-1), no measurement terms.
   void reset(const Sensor& sensor, const Mat2& noise_information, const Pose& prediction,
@@ -63,10 +63,15 @@ class MclObjective {
   }
 
   /// Adds the term of landmark m observed as z. Returns false (and adds nothing) when full.
-  bool add(const Landmark& m, const Measurement& z) {
+  bool add(const Landmark& m, const Measurement& z) { return add(m, z, noise_information_); }
+
+  /// The same with the term's own information S^-1 in place of Sigma2^-1: implicit SLAM (B),
+  /// whose landmarks are uncertain, has S = H_m P H_m^T + Sigma2 per landmark (spec §3.5).
+  bool add(const Landmark& m, const Measurement& z, const Mat2& information) {
     if (terms_ == kMaxTerms) return false;
     landmarks_[terms_] = m;
     measurements_[terms_] = z;
+    information_[terms_] = information;
     ++terms_;
     return true;
   }
@@ -99,13 +104,14 @@ class MclObjective {
     for (int i = 0; i < terms_; ++i) {
       const Landmark& m = landmarks_[i];
       const Measurement e = sensor_->residual(sensor_->predict(x, m), measurements_[i]);
-      const Measurement s = noise_information_ * e;
+      const Mat2& information = information_[i];
+      const Measurement s = information * e;
       value += 0.5 * e.dot(s);
       if (!gradient && !hessian && !gauss_newton) continue;
       const Mat23 j = sensor_->jacobian_pose(x, m);
       if (gradient) *gradient += j.transpose() * s;
       if (hessian || gauss_newton) {
-        const Mat3 jnj = j.transpose() * noise_information_ * j;
+        const Mat3 jnj = j.transpose() * information * j;
         if (gauss_newton) *gauss_newton += jnj;
         if (hessian) {
           *hessian += jnj;
@@ -130,8 +136,6 @@ class MclObjective {
     const Vec<3> pd = prior_information_ * d;
     double value = constant_ + 0.5 * d.dot(pd);
     const bool derivatives = gradient || hessian || gauss_newton;
-    const double n00 = noise_information_(0, 0), n01 = noise_information_(0, 1),
-                 n11 = noise_information_(1, 1);
     // Measurement-term sums: gradient g0..g2, Gauss-Newton J^T N J (symmetric, upper part), and
     // the residual-weighted second derivatives (x, y block only).
     double g0 = 0, g1 = 0, g2 = 0;
@@ -140,6 +144,8 @@ class MclObjective {
     for (int i = 0; i < terms_; ++i) {
       const Landmark& m = landmarks_[i];
       const Measurement& z = measurements_[i];
+      const double n00 = information_[i](0, 0), n01 = information_[i](0, 1),
+                   n11 = information_[i](1, 1);
       const double dx = x(0) - m(0), dy = x(1) - m(1);
       const double r2 = dx * dx + dy * dy, r = std::sqrt(r2);
       const double e0 = r - z(0);
@@ -205,6 +211,7 @@ class MclObjective {
   int terms_ = 0;
   std::array<Landmark, kMaxTerms> landmarks_;
   std::array<Measurement, kMaxTerms> measurements_;
+  std::array<Mat2, kMaxTerms> information_;  ///< Sigma2^-1, or the term's own S^-1
 };
 
 /// The Gaussian approximation at the minimum that both maps use: mu = x, phi = value (constants

@@ -8,9 +8,9 @@
 //                         at the sampled X (Montemerlo et al. 2002).
 //   FastSlam2Proposal     the measurement model linearised at f (linearized_optimal_proposal);
 //                         the weight includes the pose term H_x Sigma1 H_x^T.
-//   ImplicitPoseProposal  implicit sampling of F (PoseObjective) with the linear map: (A) point
-//                         landmarks, S_i = Sigma2; (B) EKF landmarks, S_i = H_m P_i H_m^T + Sigma2
-//                         frozen at f.
+//   ImplicitPoseProposal  implicit sampling of F (set_pose_objective) with the linear map:
+//                         (A) point landmarks, S_i = Sigma2; (B) EKF landmarks,
+//                         S_i = H_m P_i H_m^T + Sigma2 frozen at f.
 //
 // A proposal is any type modelling LandmarkPoseProposal (below): the three above, or a user's,
 // which plugs into make_particle_slam_filter (slam_filter.hpp) without editing the library. It
@@ -21,7 +21,7 @@
 //   PoseDraw d = FastSlam2Proposal{}.propose(step, rng);   // d.log_weight = -inf: weight zero
 //
 // A proposal's draws come from the stream of its kPurpose; it never throws or allocates per
-// call (ImplicitPoseProposal keeps a per-thread buffer of landmark terms).
+// call.
 
 #include <cmath>
 #include <concepts>
@@ -162,8 +162,9 @@ struct FastSlam2Proposal {
   }
 };
 
-/// Implicit SLAM, (A) with point_landmarks (the paper's) or (B) without. Its objectives are
-/// written out for the range-bearing sensor (proposals.hpp).
+/// Implicit SLAM, (A) with point_landmarks (the paper's) or (B) without: the filter layer's pose
+/// objective (set_pose_objective) for any landmark sensor; (A)'s joint draw of a new landmark is
+/// written out for the range-bearing sensor (NewLandmarkObjective).
 struct ImplicitPoseProposal {
   static constexpr std::uint64_t kPurpose = purpose::kReference;
   bool point = false;  ///< (A): S_i = Sigma2, landmarks fixed; (B): S_i = H_m P_i H_m^T + Sigma2
@@ -171,29 +172,19 @@ struct ImplicitPoseProposal {
 
   bool point_landmarks() const { return point; }
 
-  PoseDraw propose(const PoseStep<robot::RangeBearingSensor>& s, Rng& rng) const {
-    thread_local std::vector<LandmarkTerm> terms;
+  template <typename Sensor>
+  PoseDraw propose(const PoseStep<Sensor>& s, Rng& rng) const {
+    PoseObjective<Sensor> F;
     PoseDraw d;
     d.x = s.f;
-    terms.resize(s.known.size());
-    bool ok = true;
-    for (std::size_t i = 0; i < s.known.size(); ++i) {
-      const auto& k = s.known[i];
-      Mat<2> sk = s.sensor.noise_covariance();
-      if (!point) {
-        const Mat<2> hm = s.sensor.jacobian_landmark(s.f, k.mean);
-        sk += hm * k.cov * hm.transpose();
-      }
-      ok = ok && terms[i].set(k.mean, k.z, sk);
-    }
-    const PoseObjective F(s.f, s.sigma1, terms);
-    PoseMinimum pm;
-    if (ok && F.ok()) pm = newton_minimize<SmallFactor<3>>(F, s.f, newton);
+    filter::PoseMinimum pm;
+    if (set_pose_objective(F, s.sensor, s.f, s.sigma1_llt, s.known, point))
+      pm = newton_minimize<SmallFactor<3>>(F, s.f, newton);
     d.newton_solved = true;
     d.newton_iterations = pm.iterations;
     d.newton_converged = pm.converged();
-    if (!pose_minimum_usable(pm)) return detail::failure(d);
-    d.log_weight = linear_map(WithConstant{F}, pm.x, pm.factor, rng.normal_vector<3>(), d.x);
+    if (!filter::usable(pm)) return detail::failure(d);
+    d.log_weight = linear_map(F, pm.x, pm.factor, rng.normal_vector<3>(), d.x);
     return d;
   }
 
@@ -226,6 +217,7 @@ static_assert(PointLandmarkProposal<ImplicitPoseProposal>);
 static_assert(JointNewLandmarkProposal<ImplicitPoseProposal>);
 static_assert(LandmarkPoseProposal<FastSlam1Proposal, robot::MountedRangeBearingSensor>);
 static_assert(LandmarkPoseProposal<FastSlam2Proposal, robot::MountedRangeBearingSensor>);
+static_assert(LandmarkPoseProposal<ImplicitPoseProposal, robot::MountedRangeBearingSensor>);
 
 /// Any LandmarkPoseProposal for the filter's sensor, behind one type: what the particle SLAM
 /// filter holds. One indirect call per particle and step (the proposal itself is not copied per

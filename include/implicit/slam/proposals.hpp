@@ -1,29 +1,30 @@
 #pragma once
 // The functions F that implicit SLAM minimises and samples around (spec §3.3, §3.5, §3.7).
 //
-// PoseObjective (3-D, known landmarks): for one particle with predicted pose f, process noise
-// Sigma1 and landmark terms (m_i, z_i, S_i),
-//   F(x) = 1/2 |x - f|^2_{Sigma1^-1} + sum_i 1/2 e_i^T S_i^-1 e_i,   e_i = (r_i - z_r, wrap(b_i -
-//   z_b))
-// plus constant() = 1/2 log det(2 pi Sigma1) + sum_i 1/2 log det(2 pi S_i), which the weights keep.
-// Implicit SLAM (A) uses S_i = Sigma2 and the particle's point landmark: this is implicit MCL.
-// Implicit SLAM (B) uses S_i = H_m P_i H_m^T + Sigma2 frozen at (f, m_i).
+// The pose F (3-D, known landmarks) is the filter layer's (filter/mcl_objective.hpp): for one
+// particle with predicted pose f, process noise Sigma1 and landmark terms (m_i, z_i, S_i),
+//   F(x) = 1/2 |x - f|^2_{Sigma1^-1} + sum_i 1/2 e_i^T S_i^-1 e_i + constant,
+//   constant = 1/2 log det(2 pi Sigma1) + sum_i 1/2 log det(2 pi S_i),
+// which the weights keep. Implicit SLAM (A) uses S_i = Sigma2 and the particle's point landmark:
+// this is implicit MCL. Implicit SLAM (B) uses S_i = H_m P_i H_m^T + Sigma2 frozen at (f, m_i),
+// a term with its own information matrix. set_pose_objective() builds it for a particle.
 //
 // NewLandmarkObjective (5-D, a new landmark in (A)): F(x, theta) = 1/2|x - f|^2_{Sigma1^-1}
 // + 1/2 e(x, theta)^T Sigma2^-1 e(x, theta) with a flat prior on theta. Its minimiser is closed
 // form, mu = (f, g(f, z)) with F(mu) = 0, and H = blockdiag(Sigma1^-1, 0) + J^T Sigma2^-1 J.
 //
 // Both are minimised and sampled by the implicit-sampling kernel (core/newton.hpp,
-// core/implicit_maps.hpp); only F and its derivatives live here:
+// core/implicit_maps.hpp):
 //
-//   PoseObjective F(f, sigma1, terms);
-//   PoseMinimum r = newton_minimize<SmallFactor<3>>(F, f, pose_newton_options(20, 1e-10));
-//   Pose x;
-//   double log_w = linear_map(WithConstant{F}, r.x, r.factor, xi, x);  // if pose_minimum_usable(r)
+//   PoseObjective<> F;
+//   if (set_pose_objective(F, sensor, f, sigma1_llt, known, point_landmarks)) {
+//     filter::PoseMinimum r = newton_minimize<SmallFactor<3>>(F, f, pose_newton_options(20,
+//     1e-10)); Pose x; double log_w = linear_map(F, r.x, r.factor, xi, x);  // if filter::usable(r)
+//   }
 //
-// Mistakes to avoid: dropping constant() (WithConstant) or log det L from the weight (they differ
-// between particles, spec E23/E24); differentiating at range 0 (F is +inf there, and the line
-// search treats it as a failed step).
+// Mistakes to avoid: dropping the constant or log det L from the weight (they differ between
+// particles, spec E23/E24); differentiating at range 0 (F is +inf there, and the line search
+// treats it as a failed step).
 
 #include <cmath>
 #include <cstddef>
@@ -36,129 +37,11 @@
 #include "implicit/core/newton.hpp"
 #include "implicit/core/types.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/filter/mcl_objective.hpp"
 #include "implicit/robot/models.hpp"
 #include "implicit/robot/range_bearing.hpp"
 
 namespace implicit::slam {
-
-/// 1/2 e^T S^-1 e for one landmark, S given by its Cholesky factor.
-struct LandmarkTerm {
-  Vec<2> landmark = Vec<2>::Zero();
-  Vec<2> z = Vec<2>::Zero();
-  Eigen::LLT<Mat<2>> s_llt;
-  double half_log_det_2pi_s = 0.0;  ///< 1/2 log det(2 pi S)
-
-  /// Factorises S; returns false when S is not positive definite.
-  bool set(const Vec<2>& m, const Vec<2>& measurement, const Mat<2>& s) {
-    landmark = m;
-    z = measurement;
-    s_llt.compute(s);
-    if (s_llt.info() != Eigen::Success) return false;
-    const Mat<2> l = s_llt.matrixL();
-    half_log_det_2pi_s = kLog2Pi + std::log(l(0, 0)) + std::log(l(1, 1));
-    return std::isfinite(half_log_det_2pi_s);
-  }
-};
-
-class PoseObjective {
- public:
-  /// `sigma1` must be SPD (check ok()). `terms` must outlive the objective.
-  PoseObjective(const Vec<3>& f, const Mat<3>& sigma1, std::span<const LandmarkTerm> terms)
-      : f_(f), terms_(terms), llt1_(sigma1) {
-    ok_ = llt1_.info() == Eigen::Success;
-    if (!ok_) return;
-    precision_ = llt1_.solve(Mat<3>::Identity());
-    precision_ = 0.5 * (precision_ + precision_.transpose()).eval();
-    const Mat<3> l = llt1_.matrixL();
-    constant_ = 1.5 * kLog2Pi + l.diagonal().array().log().sum();
-    for (const auto& t : terms_) constant_ += t.half_log_det_2pi_s;
-  }
-
-  bool ok() const { return ok_ && std::isfinite(constant_); }
-  const Vec<3>& prior_mean() const { return f_; }
-  const Mat<3>& prior_precision() const { return precision_; }
-  /// 1/2 log det(2 pi Sigma1) + sum_i 1/2 log det(2 pi S_i).
-  double constant() const { return constant_; }
-
-  /// F(x) without constant(); +inf when not finite (e.g. x on a landmark). No Jacobians: this is
-  /// what backtracking and the weight call.
-  double value(const Vec<3>& x) const {
-    const Vec<3> d = x - f_;
-    double v = 0.5 * d.dot(precision_ * d);
-    for (const auto& t : terms_) {
-      const Residual res(t, x);
-      v += 0.5 * res.e.dot(t.s_llt.solve(res.e));
-    }
-    return std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
-  }
-
-  /// F(x), its gradient, exact Hessian and Gauss-Newton Hessian (exact minus residual terms).
-  double evaluate(const Vec<3>& x, Vec<3>& grad, Mat<3>& hess, Mat<3>& hess_gn) const {
-    const Vec<3> d = x - f_;
-    grad = precision_ * d;
-    double v = 0.5 * d.dot(grad);
-    hess_gn = precision_;
-    Mat<2> second = Mat<2>::Zero();  // residual-weighted second derivatives (x, y block)
-    for (const auto& t : terms_) {
-      const Residual res(t, x);
-      const double dx = res.dx, dy = res.dy, r2 = res.r2, r = res.r;
-      Eigen::Matrix<double, 2, 3> j;
-      j << dx / r, dy / r, 0.0, -dy / r2, dx / r2, -1.0;
-      const Vec<2> w = t.s_llt.solve(res.e);
-      v += 0.5 * res.e.dot(w);
-      grad.noalias() += j.transpose() * w;
-      const Eigen::Matrix<double, 2, 3> sj = t.s_llt.solve(j);
-      hess_gn.noalias() += j.transpose() * sj;
-      const double r3 = r2 * r, r4 = r2 * r2;
-      second(0, 0) += w(0) * dy * dy / r3 + w(1) * 2.0 * dx * dy / r4;
-      second(0, 1) += -w(0) * dx * dy / r3 + w(1) * (dy * dy - dx * dx) / r4;
-      second(1, 1) += w(0) * dx * dx / r3 - w(1) * 2.0 * dx * dy / r4;
-    }
-    second(1, 0) = second(0, 1);
-    hess = hess_gn;
-    hess.topLeftCorner<2, 2>() += second;
-    return std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
-  }
-
-  /// The kernel's form (core/newton.hpp): the value alone, or all derivatives (the Newton loop
-  /// asks for the gradient, Hessian and Gauss-Newton Hessian together).
-  double evaluate(const Vec<3>& x, Vec<3>* grad, Mat<3>* hess, Mat<3>* hess_gn = nullptr) const {
-    if (grad == nullptr && hess == nullptr && hess_gn == nullptr) return value(x);
-    if (grad != nullptr && hess != nullptr && hess_gn != nullptr)
-      return evaluate(x, *grad, *hess, *hess_gn);
-    Vec<3> g;
-    Mat<3> h, gn;
-    const double v = evaluate(x, g, h, gn);
-    if (grad != nullptr) *grad = g;
-    if (hess != nullptr) *hess = h;
-    if (hess_gn != nullptr) *hess_gn = gn;
-    return v;
-  }
-
- private:
-  /// e = (range - z_r, wrap(bearing - z_b)) at x, with the offsets its derivatives need.
-  struct Residual {
-    double dx, dy, r2, r;
-    Vec<2> e;
-    Residual(const LandmarkTerm& t, const Vec<3>& x)
-        : dx(x(0) - t.landmark(0)),
-          dy(x(1) - t.landmark(1)),
-          r2(dx * dx + dy * dy),
-          r(std::sqrt(r2)),
-          e(r - t.z(0), wrap_angle(std::atan2(-dy, -dx) - x(2) + kPi / 2.0 - t.z(1))) {}
-  };
-
-  Vec<3> f_;
-  std::span<const LandmarkTerm> terms_;
-  Eigen::LLT<Mat<3>> llt1_;
-  Mat<3> precision_ = Mat<3>::Zero();
-  double constant_ = 0.0;
-  bool ok_ = false;
-};
-
-/// The pose minimum of implicit SLAM: mu = x, the factor of the Hessian used for sampling, and
-/// how it was found (exact_factor false: the exact Hessian was not SPD, Gauss-Newton was used).
-using PoseMinimum = NewtonMinimum<SmallFactor<3>>;
 
 /// The kernel's options for the pose solve: exact Hessian, Gauss-Newton when it is not SPD,
 /// Armijo backtracking (40 halvings) where a non-finite F is a failed step, and one stopping
@@ -177,11 +60,6 @@ inline NewtonOptions pose_newton_options(int max_iterations, double decrement_to
   o.max_backtracks = 40;
   o.fallback = HessianFallback::kGaussNewton;
   return o;
-}
-
-/// The minimum can be sampled: a finite point with an SPD factor of the Hessian there.
-inline bool pose_minimum_usable(const PoseMinimum& r) {
-  return r.factor_ok && r.status != MinimizeStatus::kNonFinite && r.x.allFinite();
 }
 
 /// F with its constant, for the weight: log_weight.hpp needs F(X) including every constant that
@@ -214,6 +92,44 @@ Mat<2> landmark_jacobian(const Sensor& sensor, const Vec<3>& x, const Vec<2>& m)
     return sensor.jacobian_landmark(x, m);
   else
     return -sensor.jacobian_pose(x, m).template leftCols<2>();
+}
+
+/// Known landmarks a particle's pose objective holds at one step; a particle seeing more gets
+/// weight zero (the Car Park sees at most 6 per step, Victoria Park about 7 on average).
+inline constexpr int kMaxKnownPerStep = 64;
+
+/// The pose objective of implicit SLAM: the filter layer's, one term per known landmark.
+template <robot::LandmarkSensor Sensor = robot::RangeBearingSensor>
+using PoseObjective = filter::MclObjective<Sensor, kMaxKnownPerStep>;
+
+/// Sets F for one particle: prior N(f, Sigma1), a term per known landmark with S_i = Sigma2
+/// (point_landmarks, (A)) or H_m P_i H_m^T + Sigma2 at (f, m_i) ((B)), and the constant. Returns
+/// false when some S_i is not SPD or there are more than kMaxKnownPerStep landmarks.
+template <robot::LandmarkSensor Sensor>
+bool set_pose_objective(PoseObjective<Sensor>& F, const Sensor& sensor, const Vec<3>& f,
+                        const Eigen::LLT<Mat<3>>& sigma1_llt, std::span<const KnownLandmark> known,
+                        bool point_landmarks) {
+  if (known.size() > static_cast<std::size_t>(kMaxKnownPerStep)) return false;
+  Mat<3> precision = sigma1_llt.solve(Mat<3>::Identity());
+  precision = 0.5 * (precision + precision.transpose()).eval();
+  const Mat<3> l1 = sigma1_llt.matrixL();
+  const Mat<2>& r = sensor.noise_covariance();
+  F.reset(sensor, Mat<2>::Identity(), f, precision,
+          1.5 * kLog2Pi + l1.diagonal().array().log().sum());
+  for (const KnownLandmark& k : known) {
+    Mat<2> s = r;
+    if (!point_landmarks) {
+      const Mat<2> hm = landmark_jacobian(sensor, f, k.mean);
+      s += hm * k.cov * hm.transpose();
+    }
+    const Eigen::LLT<Mat<2>> llt(s);
+    if (llt.info() != Eigen::Success) return false;
+    const Mat<2> l = llt.matrixL();
+    const Mat<2> information = llt.solve(Mat<2>::Identity());
+    F.add(k.mean, k.z, 0.5 * (information + information.transpose()));
+    F.add_constant(kLog2Pi + std::log(l(0, 0)) + std::log(l(1, 1)));  // 1/2 log det(2 pi S_i)
+  }
+  return std::isfinite(F.constant());
 }
 
 /// FastSLAM 2.0's proposal: the measurement model linearised at the prediction f (Montemerlo et
