@@ -4,7 +4,8 @@ The package wraps the C++ library of the same name. Arrays go in and come out as
 arrays; large results (samples, weights, particles) are handed over without copies.
 
 Core (spec §1):
-    sample(F, x0, n, ...)       weighted samples of exp(-F) by implicit sampling
+    sample(F, x0, n, ...)       weighted samples of exp(-F) by implicit sampling; starts=...:
+                                the mixture over several minima (SamplerWarning otherwise)
     resample(weights, ...)      multinomial, systematic, stratified or residual ancestors
     ess(weights), log_sum_exp(a)
 
@@ -29,7 +30,7 @@ from . import _paths
 
 _paths.configure()
 
-from ._core import SampleResult, ess, log_sum_exp, resample, sample  # noqa: E402
+from ._core import SampleResult, SamplerWarning, ess, log_sum_exp, resample, sample  # noqa: E402
 from ._implicit import InvalidArgument, ParseError, __version__  # noqa: E402
 from ._implicit import ParticleFilter  # noqa: E402
 from . import control, data, eval, laser, mcl, models, slam, ssm  # noqa: E402
@@ -39,6 +40,7 @@ __all__ = [
     "ParseError",
     "ParticleFilter",
     "SampleResult",
+    "SamplerWarning",
     "__version__",
     "control",
     "data",

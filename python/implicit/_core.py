@@ -1,9 +1,16 @@
 """The sampling core: implicit.sample, resample, ess and log_sum_exp (spec §1)."""
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import _implicit
+
+
+class SamplerWarning(UserWarning):
+    """implicit.sample may have sampled one minimum of several: its samples and log Z can then be
+    wrong while the ESS looks healthy. Issued when x0 is a point where F is not locally convex
+    (single start), or when another start found a lower minimum than x0's (with `starts`)."""
 
 
 @dataclass(frozen=True)
@@ -24,6 +31,10 @@ class SampleResult:
         log_det_L: log det of the Cholesky factor of the Hessian at mu.
         zero_weight: samples with weight zero.
         map_failures: samples the map could not place (weight zero).
+        minima: (K, d) the distinct minima found from x0 and `starts`, lowest F first (K = 1
+            for a single start; mode is minima[0]).
+        minima_phi: (K,) F at each minimum.
+        mixture_weights: (K,) the proposal's weight pi_k of each minimum (Laplace mass), sum 1.
     """
 
     samples: np.ndarray
@@ -38,6 +49,9 @@ class SampleResult:
     log_det_L: float
     zero_weight: int
     map_failures: int
+    minima: np.ndarray
+    minima_phi: np.ndarray
+    mixture_weights: np.ndarray
 
     def mean(self):
         """Self-normalised posterior mean (d,)."""
@@ -49,12 +63,25 @@ class SampleResult:
         return (d * self.weights[:, None]).T @ d
 
 
-def sample(F, x0, n=1000, grad=None, hess=None, map="linear", seed=1, vectorized=False):
+def sample(F, x0, n=1000, grad=None, hess=None, map="linear", seed=1, vectorized=False,
+           starts=None):
     """Implicit sampling of the density proportional to exp(-F(x)) (spec §1).
 
     Minimises F from x0 (Newton), then maps n Gaussian reference samples onto the target with
     the linear map (x = mu + L^-T xi) or the random map (a root of F(x) - phi = |xi|^2 / 2 along
     a random direction), and weights them.
+
+    One start finds one minimum: when F has several, the samples and log Z miss the others
+    while the ESS can look healthy. With `starts`, Newton runs from x0 and from every row; the
+    distinct minima (closer than 0.01 standard deviations of either's Laplace approximation:
+    one) make the mixture q = sum_k pi_k N(mu_k, H_k^-1), pi_k proportional to
+    exp(-phi_k) / sqrt(det H_k), and every sample is weighted by exp(-F(x)) / q(x), so the mean
+    weight estimates Z without bias whatever the minima found (spec §1.2). Starts whose
+    minimisation fails are left out; the mixture uses the linear map.
+
+    Warns (SamplerWarning) when F is not locally convex at x0 without `starts` (Newton from
+    there may find any of several minima), and when another start finds a lower minimum than
+    x0's (a single start from x0 would have missed it).
 
     Args:
         F: the negative log density, a function of x of shape (d,) returning a float; with
@@ -67,13 +94,20 @@ def sample(F, x0, n=1000, grad=None, hess=None, map="linear", seed=1, vectorized
         map: "linear" or "random".
         seed: sample j uses the random stream (seed, 0, j); results do not depend on threads.
         vectorized: whether F takes a batch (k, d).
+        starts: optional (K, d) further start points for the minimisation (multi-start).
 
     Returns:
-        SampleResult with samples (n, d), log_weights, weights, ess, log_Z, status.
+        SampleResult with samples (n, d), log_weights, weights, ess, log_Z, status, and the
+        minima found with their mixture weights.
 
     Raises:
-        implicit.InvalidArgument (a ValueError): bad shapes, non-finite x0, unknown map, or a
-        minimisation that does not converge (the message names the status).
+        implicit.InvalidArgument (a ValueError): bad shapes, non-finite x0 or starts, unknown
+        map, a minimisation that does not converge from any start (the message names the
+        status), or map="random" with more than one minimum.
+
+    Warns:
+        SamplerWarning: x0 where F is not locally convex (no `starts`), or a start that found
+        a lower minimum than x0's.
 
     Example:
         >>> import numpy as np, implicit
@@ -81,7 +115,8 @@ def sample(F, x0, n=1000, grad=None, hess=None, map="linear", seed=1, vectorized
         >>> r.samples.shape, round(float(r.weights.sum()), 12)
         ((100, 2), 1.0)
     """
-    d = _implicit._sample(F, x0, int(n), grad, hess, map, int(seed), bool(vectorized))
+    d = _implicit._sample(F, x0, int(n), grad, hess, map, int(seed), bool(vectorized), starts)
+    _warn_about_minima(d, starts is None)
     return SampleResult(
         samples=d["x"],
         log_weights=d["log_weights"],
@@ -95,7 +130,30 @@ def sample(F, x0, n=1000, grad=None, hess=None, map="linear", seed=1, vectorized
         log_det_L=d["log_det_L"],
         zero_weight=d["zero_weight"],
         map_failures=d["map_failures"],
+        minima=d["minima"],
+        minima_phi=d["minima_phi"],
+        mixture_weights=d["mixture_weights"],
     )
+
+
+def _warn_about_minima(d, single_start):
+    # stacklevel 3: the warning points at the caller of implicit.sample.
+    if single_start and not d["x0_convex"]:
+        warnings.warn(
+            "implicit.sample: F is not locally convex at x0 (its Hessian there is not positive "
+            f"definite); Newton went to the minimum at {d['mode'].tolist()} (F = {d['phi']:.6g}), "
+            "possibly one of several, and the samples and log Z would miss the others: pass "
+            "starts=... to start from several points and sample the mixture over all minima",
+            SamplerWarning, stacklevel=3)
+    first = d["found_by"][0]
+    if first > 0:  # x0 converged, but not to the lowest minimum (index 0)
+        phi = d["minima_phi"]
+        warnings.warn(
+            f"implicit.sample: the minimum found from x0 (F = {phi[first]:.6g} at "
+            f"{d['minima'][first].tolist()}) is not the lowest: another start found F = "
+            f"{phi[0]:.6g} at {d['minima'][0].tolist()}; a single start from x0 would have missed "
+            f"it. The mixture over all {len(phi)} minima was sampled.",
+            SamplerWarning, stacklevel=3)
 
 
 SCHEMES = ("multinomial", "systematic", "stratified", "residual")
