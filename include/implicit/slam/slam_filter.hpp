@@ -24,6 +24,10 @@
 //                           landmarks (innovation covariance frozen at the prediction), then an
 //                           EKF update of the landmark.
 //
+// The particle methods differ only in their pose proposal, a plug-in: make_particle_slam_filter
+// (below) runs any type modelling LandmarkPoseProposal (pose_proposals.hpp), e.g. a user's, and
+// make_slam_filter picks the built-in one of options.method (pose_proposal).
+//
 // Association: kKnown uses Observation::landmark (tests, synthetic data); kMaximumLikelihood picks,
 // per particle (EKF: once), the landmark with the smallest d^2 + log det S among those inside the
 // chi-square gate and creates a new landmark when none is inside. A new landmark contributes the
