@@ -4,6 +4,7 @@
 // user's wrapper of implicit SLAM (A) gives implicit's, through the optional members.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -16,6 +17,7 @@
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/rng.hpp"
+#include "implicit/robot/mounted_sensor.hpp"
 #include "implicit/slam/dataset.hpp"
 #include "implicit/slam/pose_proposals.hpp"
 #include "implicit/slam/slam_filter.hpp"
@@ -168,6 +170,51 @@ TEST(UserPoseProposal, TheFrontDoorIsTheBuiltInProposal) {
     auto b = slam::make_particle_slam_filter(o, d.initial_pose, slam::pose_proposal(o));
     EXPECT_EQ(differing_steps(*a, *b, d), 0) << slam::to_string(method);
   }
+}
+
+// The built-ins read the sensor through robot::LandmarkSensor only: with the mounted sensor at
+// zero offset (exactly RangeBearingSensor, robot/mounted_sensor.hpp) they draw the same poses
+// and weights from the same stream, up to the round-off of its other formulas (sqrt for hypot,
+// Hessians by automatic differentiation): 1e-9 where the draws are O(10) and Newton runs to
+// round-off.
+TEST(UserPoseProposal, TheBuiltInsReadTheSensorThroughTheSeam) {
+  const RangeBearingSensor plain;
+  const implicit::robot::MountedRangeBearingSensor mounted({}, plain.noise_covariance()(0, 0),
+                                                           plain.noise_covariance()(1, 1));
+  const slam::Pose f(10.0, 5.0, 0.3);
+  Mat<3> sigma1;
+  sigma1 << 4e-3, 1e-3, 0.0, 1e-3, 3e-3, 2e-4, 0.0, 2e-4, 1e-4;
+  const Eigen::LLT<Mat<3>> llt(sigma1);
+  std::vector<slam::KnownLandmark> known(2);
+  known[0].mean = Vec<2>(20, 12);
+  known[0].cov << 0.05, 0.01, 0.01, 0.03;
+  known[1].mean = Vec<2>(11, 17);
+  known[1].cov << 0.02, 0.0, 0.0, 0.02;
+  for (auto& k : known) {
+    k.z = plain.predict(f + Vec<3>(0.05, -0.02, 0.01), k.mean);
+    ASSERT_LT((k.z - mounted.predict(f + Vec<3>(0.05, -0.02, 0.01), k.mean)).norm(), 1e-12);
+  }
+  const slam::PoseStep<> a{plain, f, sigma1, llt, known};
+  const slam::PoseStep<implicit::robot::MountedRangeBearingSensor> b{mounted, f, sigma1, llt,
+                                                                     known};
+  slam::ImplicitPoseProposal implicit_b;
+  implicit_b.newton = slam::pose_newton_options(50, 1e-24);
+  slam::ImplicitPoseProposal implicit_a = implicit_b;
+  implicit_a.point = true;
+  auto compare = [&](const auto& proposal, const char* name) {
+    for (std::uint64_t j = 0; j < 20; ++j) {
+      Rng ra({3, 1, j, proposal.kPurpose}), rb({3, 1, j, proposal.kPurpose});
+      const slam::PoseDraw da = proposal.propose(a, ra), db = proposal.propose(b, rb);
+      ASSERT_FALSE(da.failed || db.failed) << name;
+      EXPECT_LT((da.x - db.x).cwiseAbs().maxCoeff(), 1e-9) << name << " particle " << j;
+      EXPECT_NEAR(da.log_weight, db.log_weight, 1e-9 * std::max(1.0, std::abs(da.log_weight)))
+          << name << " particle " << j;
+    }
+  };
+  compare(slam::FastSlam1Proposal{}, "fastslam1");
+  compare(slam::FastSlam2Proposal{}, "fastslam2");
+  compare(implicit_a, "implicit (A)");
+  compare(implicit_b, "implicit (B)");
 }
 
 TEST(UserPoseProposal, BadInputIsRefused) {
