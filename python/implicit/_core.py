@@ -1,4 +1,5 @@
 """The sampling core: implicit.sample, resample, ess and log_sum_exp (spec §1)."""
+import numbers
 import warnings
 from dataclasses import dataclass
 
@@ -10,7 +11,8 @@ from . import _implicit
 class SamplerWarning(UserWarning):
     """implicit.sample may have sampled one minimum of several: its samples and log Z can then be
     wrong while the ESS looks healthy. Issued when x0 is a point where F is not locally convex
-    (single start), or when another start found a lower minimum than x0's (with `starts`)."""
+    (single start), when another start found a lower minimum than x0's (with `starts`), or
+    when a sample has a lower F than every minimum found."""
 
 
 @dataclass(frozen=True)
@@ -80,8 +82,9 @@ def sample(F, x0, n=1000, grad=None, hess=None, map="linear", seed=1, vectorized
     minimisation fails are left out; the mixture uses the linear map.
 
     Warns (SamplerWarning) when F is not locally convex at x0 without `starts` (Newton from
-    there may find any of several minima), and when another start finds a lower minimum than
-    x0's (a single start from x0 would have missed it).
+    there may find any of several minima), when another start finds a lower minimum than x0's
+    (a single start from x0 would have missed it), and when a sample has a lower F than every
+    minimum found (F has a lower minimum that no start reached).
 
     Args:
         F: the negative log density, a function of x of shape (d,) returning a float; with
@@ -106,8 +109,8 @@ def sample(F, x0, n=1000, grad=None, hess=None, map="linear", seed=1, vectorized
         status), or map="random" with more than one minimum.
 
     Warns:
-        SamplerWarning: x0 where F is not locally convex (no `starts`), or a start that found
-        a lower minimum than x0's.
+        SamplerWarning: x0 where F is not locally convex (no `starts`), a start that found a
+        lower minimum than x0's, or a sample below every minimum found.
 
     Example:
         >>> import numpy as np, implicit
@@ -115,7 +118,8 @@ def sample(F, x0, n=1000, grad=None, hess=None, map="linear", seed=1, vectorized
         >>> r.samples.shape, round(float(r.weights.sum()), 12)
         ((100, 2), 1.0)
     """
-    d = _implicit._sample(F, x0, int(n), grad, hess, map, int(seed), bool(vectorized), starts)
+    d = _implicit._sample(F, x0, _count(n, "sample: n", 1), grad, hess, map, _seed(seed),
+                          bool(vectorized), starts)
     _warn_about_minima(d, starts is None)
     return SampleResult(
         samples=d["x"],
@@ -145,6 +149,16 @@ def _warn_about_minima(d, single_start):
             "possibly one of several, and the samples and log Z would miss the others: pass "
             "starts=... to start from several points and sample the mixture over all minima",
             SamplerWarning, stacklevel=3)
+    # A sample below the lowest minimum found: F has a lower minimum no start reached. The
+    # margin is far above the minimiser's error in F at a minimum (its gradient is ~1e-8).
+    phi = d["minima_phi"][0]
+    if d["lowest_sample_F"] < phi - 1e-6 * (1.0 + abs(phi)):
+        warnings.warn(
+            f"implicit.sample: a sample has F = {d['lowest_sample_F']:.6g} at "
+            f"{d['lowest_sample'].tolist()}, below the lowest minimum found (F = {phi:.6g} at "
+            f"{d['mode'].tolist()}): F has a lower minimum that no start reached, so the samples "
+            "and log Z miss its mass; pass starts=... including a point near that sample",
+            SamplerWarning, stacklevel=3)
     first = d["found_by"][0]
     if first > 0:  # x0 converged, but not to the lowest minimum (index 0)
         phi = d["minima_phi"]
@@ -154,6 +168,24 @@ def _warn_about_minima(d, single_start):
             f"{phi[0]:.6g} at {d['minima'][0].tolist()}; a single start from x0 would have missed "
             f"it. The mixture over all {len(phi)} minima was sampled.",
             SamplerWarning, stacklevel=3)
+
+
+def _count(value, name, lo):
+    """An integer count >= lo: a float (even 3.0) or bool is refused, never truncated."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise _implicit.InvalidArgument(
+            f"{name}: expected an integer, got {type(value).__name__} {value!r}")
+    if value < lo:
+        raise _implicit.InvalidArgument(f"{name}: expected an integer >= {lo}, got {value}")
+    return int(value)
+
+
+def _seed(value, name="seed"):
+    """A seed: an integer in [0, 2^64 - 1], the range of the tool's --seed."""
+    seed = _count(value, name, 0)
+    if seed >= 2**64:
+        raise _implicit.InvalidArgument(f"{name}: expected an integer below 2^64, got {seed}")
+    return seed
 
 
 SCHEMES = ("multinomial", "systematic", "stratified", "residual")
@@ -178,12 +210,13 @@ def resample(weights, n=None, scheme="systematic", seed=1, uniforms=None):
     """
     w = np.asarray(weights, dtype=float)
     m = w.shape[0] if w.ndim == 1 else 0
-    return _implicit._resample(scheme, w, int(m if n is None else n), int(seed), uniforms)
+    count = m if n is None else _count(n, "resample: n", 0)
+    return _implicit._resample(scheme, w, count, _seed(seed), uniforms)
 
 
 def uniforms_needed(scheme, n):
     """Number of uniforms `resample(..., scheme=scheme, n=n, uniforms=...)` consumes."""
-    return _implicit._uniforms_needed(scheme, int(n))
+    return _implicit._uniforms_needed(scheme, _count(n, "uniforms_needed: n", 0))
 
 
 def ess(weights):

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <optional>
 
@@ -113,12 +114,25 @@ Minima find_minima(const T& target, const MatX& starts, const MinimizeOptions& o
   return out;
 }
 
+/// The sample with the lowest F: below the lowest minimum found, it shows that F has a lower
+/// minimum that no start reached.
+struct LowestSample {
+  double value = std::numeric_limits<double>::infinity();
+  VecX x;
+  void see(const VecX& at, double v) {
+    if (std::isfinite(v) && v < value) {
+      value = v;
+      x = at;
+    }
+  }
+};
+
 /// Runs `draw(target)` (one F call per sample, in sample order: a serial run) with F evaluated
 /// on all n samples in one call when vectorized: a first pass records the points, one call of F
 /// evaluates them all, a second pass replays the values.
 template <typename Draw, typename T>
 SampleSet<Eigen::Dynamic> draw_batched(const PythonDensity& d, std::size_t n, bool batched,
-                                       const T& target, Draw draw) {
+                                       const T& target, LowestSample& lowest, Draw draw) {
   if (!batched) return draw(target);
   MatX points(d.dim, static_cast<Eigen::Index>(n));
   Eigen::Index next = 0;
@@ -135,7 +149,12 @@ SampleSet<Eigen::Dynamic> draw_batched(const PythonDensity& d, std::size_t n, bo
       require_shape(d.f(batch), "F(x) of an (n, d) array", {static_cast<py::ssize_t>(n)}, false);
   next = 0;
   return draw(make_analytic_target<Eigen::Dynamic>(
-      [&](const VecX&, VecX*, MatX*) { return values.data()[next++]; }, d.dim));
+      [&](const VecX& x, VecX*, MatX*) {
+        const double v = values.data()[next++];
+        lowest.see(x, v);
+        return v;
+      },
+      d.dim));
 }
 
 /// Whether the Hessian of F at x is positive definite (F locally convex there). Not finite: no
@@ -196,18 +215,26 @@ py::dict sample(const py::object& f, const py::object& x0_in, std::size_t n, con
           "sample: map: the mixture over {} minima uses the linear map, got 'random' (pass "
           "map='linear', or starts that find one minimum)",
           minima.modes.size());
+  LowestSample lowest;
+  auto watched = make_analytic_target<Eigen::Dynamic>(
+      [&](const VecX& x, VecX* g, MatX* h) {
+        const double v = full(x, g, h);
+        lowest.see(x, v);
+        return v;
+      },
+      d.dim);
   const StreamKey key{seed};
   const bool batched = vectorized && options.map == MapKind::kLinear;
   SampleSet<Eigen::Dynamic> s;
   std::vector<double> log_pi{0.0};
   if (minima.modes.size() == 1) {
     const auto& laplace = minima.modes.front();
-    s = draw_batched(d, n, batched, target,
+    s = draw_batched(d, n, batched, watched, lowest,
                      [&](const auto& t) { return sample_with(t, laplace, n, key, options); });
   } else {
     const MixtureProposal<Eigen::Dynamic> q(minima.modes);
     log_pi = q.log_mixture_weights();
-    s = draw_batched(d, n, batched, target,
+    s = draw_batched(d, n, batched, watched, lowest,
                      [&](const auto& t) { return sample_mixture(t, q, n, key, options); });
   }
   py::dict out;
@@ -238,6 +265,9 @@ py::dict sample(const py::object& f, const py::object& x0_in, std::size_t n, con
   out["mixture_weights"] = adopt_vector(std::move(pis));
   out["found_by"] = minima.found_by;
   out["x0_convex"] = x0_convex;
+  out["lowest_sample_F"] = lowest.value;
+  out["lowest_sample"] =
+      lowest.x.size() == d.dim ? py::object(adopt(VecX(lowest.x), {d.dim})) : py::none();
   return out;
 }
 

@@ -155,3 +155,30 @@ def test_a_start_that_fails_is_left_out_but_all_failing_raises():
 def test_bad_starts_raise_invalid_argument(kwargs, error):
     with pytest.raises(implicit.InvalidArgument, match=error):
         implicit.sample(F, np.array([-2.0]), n=10, **kwargs)
+
+
+# A cubic observation y = x^3 + noise (sd 1) of x with prior N(0, 1), observed y = 8:
+# F(x) = x^2 / 2 + (8 - x^3)^2 / 2. The prior mean x = 0 is a stationary point and a local
+# minimum (F'(0) = 0, F''(0) = 1 > 0, F(0) = 32); the global minimum is near x = 1.99 (F = 2).
+def F_cubic(x):
+    return 0.5 * x[0] ** 2 + 0.5 * (8.0 - x[0] ** 3) ** 2
+
+
+def cubic_log_z():
+    x = np.linspace(-4.0, 4.0, 800001)
+    f = 0.5 * x**2 + 0.5 * (8.0 - x**3) ** 2
+    return -f.min() + math.log(np.trapz(np.exp(-(f - f.min())), x))
+
+
+def test_start_at_the_prior_mean_of_a_cubic_observation_warns_from_the_samples():
+    # Newton stops at once at x = 0 ("converged"); the samples of N(0, 1) reach the lower well,
+    # where F is far below F(0): the warning names such a sample.
+    with pytest.warns(implicit.SamplerWarning, match=r"a sample has F = .* below the lowest minimum"):
+        r = implicit.sample(F_cubic, np.array([0.0]), n=1000, seed=1)
+    assert r.mode[0] == 0.0 and r.phi == 32.0
+    # Started near the global minimum too, the mixture is right (and x0 = 2 is the lowest: no
+    # warning), within 4.5 standard errors of quadrature.
+    r = no_warnings(lambda: implicit.sample(F_cubic, np.array([2.0]), n=N, seed=1, starts=[[0.0]]))
+    assert r.minima.shape == (2, 1)
+    log_z, se = log_z_and_se(r)
+    assert abs(log_z - cubic_log_z()) <= 4.5 * se, (log_z, cubic_log_z(), se)
