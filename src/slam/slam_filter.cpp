@@ -181,11 +181,13 @@ struct ParticleOutcome {
   int newton_not_converged = 0;
   int new_landmarks = 0;
   int updates = 0;
+  std::size_t known_over_limit = 0;  ///< known landmarks seen beyond the proposal's capacity
   /// Landmarks written this step that the association index must (re-)register.
   std::vector<std::pair<std::uint32_t, LandmarkEstimate>> moved;
 
   void reset() {
     newton_iterations = newton_solves = newton_not_converged = new_landmarks = updates = 0;
+    known_over_limit = 0;
     moved.clear();  // keeps its capacity: no allocation per particle and step
   }
 };
@@ -258,6 +260,7 @@ class ParticleSlamFilter final : public SlamFilter {
         [&](std::size_t j, Particle& p) { return step_particle(j, p, n, u, obs, slots_before); },
         8);
     const bool ml = opt_.association == Association::kMaximumLikelihood;
+    std::size_t over_limit = 0;
     for (const auto& oc : outcome_) {
       if (ml) {
         // Sequential, after the parallel particle loop: the index is shared.
@@ -269,7 +272,13 @@ class ParticleSlamFilter final : public SlamFilter {
       stats_.newton_iterations += static_cast<std::size_t>(oc.newton_iterations);
       stats_.newton_solves += static_cast<std::size_t>(oc.newton_solves);
       stats_.newton_not_converged += static_cast<std::size_t>(oc.newton_not_converged);
+      over_limit = std::max(over_limit, oc.known_over_limit);
     }
+    require(over_limit == 0,
+            "SLAM step {}: a particle sees {} known landmarks, more than the {} per step its "
+            "proposal takes (thin the detections, e.g. with a larger --min-range, or use another "
+            "method)",
+            n, over_limit, proposal_.max_known_landmarks());
     if (opt_.association == Association::kKnown) {
       for (std::size_t i = 0; i < obs.size(); ++i)
         if (use_[i] != 0) {
@@ -366,6 +375,11 @@ class ParticleSlamFilter final : public SlamFilter {
       return zero_weight(p, fresh, oc);
     }
     associate(p, f, sigma1, obs, slots_before, known, fresh);
+    if (known.size() > proposal_.max_known_landmarks()) {  // refused after the loop (step())
+      oc.known_over_limit = known.size();
+      p.x = f;
+      return zero_weight(p, fresh, oc);
+    }
     const AnyPoseProposal::Step step{opt_.sensor, f, sigma1, llt1, known};
     Rng rng({opt_.seed, n, j, proposal_.purpose()});
     if (known.empty() && fresh.size() == 1)

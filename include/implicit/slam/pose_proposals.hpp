@@ -110,6 +110,13 @@ concept JointNewLandmarkProposal = requires(const P& p, const PoseStep<Sensor>& 
                                             const Measurement& z, Rng& rng) {
   { p.propose_with_new_landmark(s, z, rng) } -> std::same_as<std::optional<NewLandmarkDraw>>;
 };
+/// The most known landmarks one step of the proposal takes (a fixed-capacity objective). The
+/// filter refuses a step that gives a particle more, naming the step, rather than weighting the
+/// particle zero in silence; a proposal without this member takes any number.
+template <typename P>
+concept BoundedProposal = requires(const P& p) {
+  { p.max_known_landmarks() } -> std::convertible_to<std::size_t>;
+};
 
 /// X ~ N(f, Sigma1): the move of every method at a step without a known landmark.
 template <typename Sensor>
@@ -171,6 +178,7 @@ struct ImplicitPoseProposal {
   NewtonOptions newton = pose_newton_options(20, 1e-10);
 
   bool point_landmarks() const { return point; }
+  std::size_t max_known_landmarks() const { return kMaxKnownPerStep; }
 
   template <typename Sensor>
   PoseDraw propose(const PoseStep<Sensor>& s, Rng& rng) const {
@@ -236,6 +244,8 @@ class AnyPoseProposal {
         }) {
     if constexpr (PointLandmarkProposal<P>)
       point_landmarks_ = static_cast<const P*>(self_.get())->point_landmarks();
+    if constexpr (BoundedProposal<P>)
+      max_known_ = static_cast<const P*>(self_.get())->max_known_landmarks();
     if constexpr (JointNewLandmarkProposal<P>)
       joint_ = [](const void* self, const Step& s, const Measurement& z, Rng& rng) {
         return static_cast<const P*>(self)->propose_with_new_landmark(s, z, rng);
@@ -244,6 +254,7 @@ class AnyPoseProposal {
 
   std::uint64_t purpose() const { return purpose_; }
   bool point_landmarks() const { return point_landmarks_; }
+  std::size_t max_known_landmarks() const { return max_known_; }
   PoseDraw propose(const Step& s, Rng& rng) const { return propose_(self_.get(), s, rng); }
   std::optional<NewLandmarkDraw> propose_with_new_landmark(const Step& s, const Measurement& z,
                                                            Rng& rng) const {
@@ -255,6 +266,7 @@ class AnyPoseProposal {
   std::shared_ptr<const void> self_;
   std::uint64_t purpose_ = 0;
   bool point_landmarks_ = false;
+  std::size_t max_known_ = std::numeric_limits<std::size_t>::max();
   PoseDraw (*propose_)(const void*, const Step&, Rng&) = nullptr;
   std::optional<NewLandmarkDraw> (*joint_)(const void*, const Step&, const Measurement&,
                                            Rng&) = nullptr;

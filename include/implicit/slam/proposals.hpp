@@ -94,8 +94,9 @@ Mat<2> landmark_jacobian(const Sensor& sensor, const Vec<3>& x, const Vec<2>& m)
     return -sensor.jacobian_pose(x, m).template leftCols<2>();
 }
 
-/// Known landmarks a particle's pose objective holds at one step; a particle seeing more gets
-/// weight zero (the Car Park sees at most 6 per step, Victoria Park about 7 on average).
+/// Known landmarks a particle's pose objective holds at one step (the Car Park sees at most 6 per
+/// step, Victoria Park about 7 on average); the particle filter refuses a step with more
+/// (ImplicitPoseProposal::max_known_landmarks), set_pose_objective returns false.
 inline constexpr int kMaxKnownPerStep = 64;
 
 /// The pose objective of implicit SLAM: the filter layer's, one term per known landmark.
