@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "experiments/grid_slam.hpp"
+#include "implicit/robot/bag.hpp"
 #include "implicit/robot/carmen.hpp"
 #include "implicit/robot/map_io.hpp"
 #include "implicit/robot/odometry_model.hpp"
@@ -45,7 +46,8 @@ void add_grid_slam_options(CLI::App& sub, GridSlamCommand& g) {
   g.laser_only = {
       sub.add_option("--alphas", g.alphas,
                      "laser: alpha1..alpha4 of the odometry synthesised from the log's corrected "
-                     "poses and of the filter's motion model (default 0.002 each)")
+                     "poses and of the filter's motion model (a ROS bag: of the filter's model "
+                     "only; default 0.002 each)")
           ->expected(4)
           ->check(in_range(0.0, 10.0)),
       sub.add_option("--max-scans", g.max_scans, "laser: use the first N scans of the log (0: all)")
@@ -60,6 +62,8 @@ void add_grid_slam_options(CLI::App& sub, GridSlamCommand& g) {
                      "information of the filter's motion noise), for post-optimisation")
           ->check(tum_file_validator()),
   };
+  add_bag_flags(sub, g.bag);
+  g.laser_only.insert(g.laser_only.end(), g.bag.given.begin(), g.bag.given.end());
 }
 
 namespace {
@@ -72,19 +76,29 @@ std::string fraction_text(const std::optional<experiments::GridSlamStat>& v) {
   return v ? fmt::format("{:.3f}", v->mean) : std::string("n/a");
 }
 
+/// The relation errors, or "n/a" without a reference (recorded odometry): never a 0 that reads
+/// as a score.
+std::string relation_text(const experiments::GridSlamResult& r) {
+  if (!r.has_reference) return "n/a (no reference poses)";
+  return fmt::format("{:.4f} ± {:.4f} m, {:.3f} deg (odometry alone {:.4f} m, {:.3f} deg)",
+                     r.relation_translation_m.mean, r.relation_translation_m.se,
+                     r.relation_rotation_deg.mean, r.odometry_translation_m,
+                     r.odometry_rotation_deg);
+}
+
 void print_grid_slam_text(const experiments::GridSlamResult& r, const std::string& data) {
   const auto& o = r.settings.run;
   fmt::print(
-      "grid SLAM on {}: {} proposal, M = {}, {} run{}, {} scans processed\n"
-      "  relation error {:.4f} ± {:.4f} m, {:.3f} deg (odometry alone {:.4f} m, {:.3f} deg)\n"
+      "grid SLAM on {}: {} proposal, M = {}, {} run{}, {} scans processed, {} odometry\n"
+      "  relation error {}\n"
       "  trajectory error after SE(2) alignment {} m (odometry alone {} m)\n"
       "  {:.2f} ms CPU per scan, {:.0f}x real time, ESS/M {:.2f}\n",
       data, slam::to_string(o.proposal), o.filter.particles, r.settings.runs,
-      r.settings.runs == 1 ? "" : "s", r.scans_processed, r.relation_translation_m.mean,
-      r.relation_translation_m.se, r.relation_rotation_deg.mean, r.odometry_translation_m,
-      r.odometry_rotation_deg, fraction_text(r.ate_m), fraction_text(r.odometry_ate_m),
+      r.settings.runs == 1 ? "" : "s", r.scans_processed,
+      o.odometry == slam::GridOdometrySource::kRecorded ? "recorded" : "synthesised",
+      relation_text(r), fraction_text(r.ate_m), fraction_text(r.odometry_ate_m),
       r.cpu_ms_per_scan.mean, r.real_time_factor, r.ess_fraction);
-  if (!o.score_map) return;
+  if (!o.score_map || !r.has_reference) return;  // no reference map to score against
   const auto& m = r.odometry_map;
   fmt::print(
       "  map against the reference poses' map: agreement {}, occupied precision {}, recall {}, "
@@ -136,7 +150,13 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
   if (shared.data_dir.empty())
     throw CLI::ValidationError("--data",
                                "--sensor laser needs --data naming a CARMEN laser log (e.g. "
-                               "data/carmen/intel-corrected.log.gz)");
+                               "data/carmen/intel-corrected.log.gz) or a ROS bag");
+  // A bag's odometry is the filter's input as recorded: there are no reference poses.
+  const bool bag = robot::is_bag(shared.data_dir);
+  if (bag && !shared.truth_trajectory.empty())
+    throw CLI::ValidationError("--truth-trajectory",
+                               "a ROS bag as --data has no reference poses to write (its odometry "
+                               "is the filter's input)");
   if (shared.method != "bootstrap" && shared.method != "gmapping" && shared.method != "implicit")
     throw CLI::ValidationError("--method", fmt::format("--sensor laser: expected bootstrap, "
                                                        "gmapping or implicit (the grid-SLAM "
@@ -155,7 +175,10 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
   if (!g.alphas.empty()) o.filter.alphas = {g.alphas[0], g.alphas[1], g.alphas[2], g.alphas[3]};
   o.max_scans = static_cast<std::size_t>(g.max_scans);
   settings.validate();
-  const robot::CarmenLog log = robot::read_carmen(shared.data_dir);
+  require_bag_for_flags(g.bag, shared.data_dir, "slam --sensor laser");
+  if (bag) o.odometry = slam::GridOdometrySource::kRecorded;
+  const robot::CarmenLog log = bag ? robot::read_bag_laser_log(shared.data_dir, g.bag.options).log
+                                   : robot::read_carmen(shared.data_dir);
   // Progress in thousandths of each run (the scans a run processes are known once it starts).
   Progress bar(fmt::format("grid SLAM {} M={}", shared.method, o.filter.particles),
                static_cast<std::size_t>(settings.runs) * 1000, ctx.show_progress());

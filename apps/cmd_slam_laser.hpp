@@ -1,10 +1,12 @@
 #pragma once
-// `implicit slam --sensor laser`: grid SLAM on a CARMEN laser log by the semi-synthetic protocol
-// (slam/grid/grid_slam_run.hpp does the work; docs/cli.md, "Grid SLAM").
+// `implicit slam --sensor laser`: grid SLAM on a CARMEN laser log by the semi-synthetic protocol,
+// or on a ROS bag with its recorded odometry (slam/grid/grid_slam_run.hpp does the work;
+// docs/cli.md, "Grid SLAM").
 
 #include <string>
 #include <vector>
 
+#include "bag_flags.hpp"
 #include "context.hpp"
 #include "experiments.hpp"
 #include "experiments/grid_slam.hpp"
@@ -22,6 +24,7 @@ struct GridSlamCommand {
   int max_scans = 0;                ///< 0: every scan
   std::string map_out;              ///< the first run's map as map_server YAML + PGM
   std::string g2o;                  ///< the first run's pose graph as a g2o file
+  BagFlags bag;                     ///< topics and frames when --data is a ROS bag
   /// The grid-SLAM options, refused with --sensor landmark (add_grid_slam_options fills it).
   std::vector<CLI::Option*> laser_only;
   /// The landmark options, refused with --sensor laser (they would be silently ignored).

@@ -59,6 +59,7 @@ MapFractions fractions_of(const std::optional<robot::MapComparison>& c) {
 GridSlamRunRecord record_of(const slam::GridSlamRun& run, std::uint64_t seed) {
   GridSlamRunRecord r;
   r.seed = seed;
+  r.has_reference = run.has_reference;
   r.relation_translation_m = run.relations.translation_mean;
   r.relation_rotation_deg = run.relations.rotation_mean_deg;
   r.odometry_translation_m = run.odometry_relations.translation_mean;
@@ -144,8 +145,9 @@ GridSlamResult run_grid_slam_experiment(const GridSlamSettings& settings,
       o.on_step = [&](std::size_t done, std::size_t total) { progress(k, done, total); };
     slam::GridSlamRun run = slam::run_grid_slam(log, o);
     result.scans_processed = run.processed;
-    if (run.reference.size() > 1)
-      result.log_seconds = std::abs(run.reference.back().time - run.reference.front().time);
+    if (run.trajectory.size() > 1)
+      result.log_seconds = std::abs(run.trajectory.back().time - run.trajectory.front().time);
+    result.has_reference = run.has_reference;
     result.runs.push_back(record_of(run, seed));
     if (run.map_score) result.map_tolerance_m = run.map_score->tolerance_m;
     if (k == 0 && settings.keep_first) result.first = std::move(run);
@@ -172,11 +174,19 @@ nlohmann::json to_json(const GridSlamResult& r) {
   j["alphas"] = {o.filter.alphas.alpha1, o.filter.alphas.alpha2, o.filter.alphas.alpha3,
                  o.filter.alphas.alpha4};
   j["seed"] = r.settings.seed;
+  j["odometry"] = o.odometry == slam::GridOdometrySource::kRecorded ? "recorded" : "synthesised";
   j["scans_processed"] = r.scans_processed;
-  j["relation_translation_m"] = stat(r.relation_translation_m);
-  j["relation_rotation_deg"] = stat(r.relation_rotation_deg);
-  j["odometry_relation_translation_m"] = r.odometry_translation_m;
-  j["odometry_relation_rotation_deg"] = r.odometry_rotation_deg;
+  // Without a reference (recorded odometry) the relation errors were not computed: null.
+  const auto scored = [&](double v) {
+    return maybe(r.has_reference ? std::optional(v) : std::nullopt);
+  };
+  const auto scored_stat = [&](const GridSlamStat& s) {
+    return maybe_stat(r.has_reference ? std::optional(s) : std::nullopt);
+  };
+  j["relation_translation_m"] = scored_stat(r.relation_translation_m);
+  j["relation_rotation_deg"] = scored_stat(r.relation_rotation_deg);
+  j["odometry_relation_translation_m"] = scored(r.odometry_translation_m);
+  j["odometry_relation_rotation_deg"] = scored(r.odometry_rotation_deg);
   j["ate_m"] = maybe_stat(r.ate_m);
   j["odometry_ate_m"] = maybe(r.odometry_ate_m);
   j["cpu_ms_per_scan"] = stat(r.cpu_ms_per_scan);
@@ -186,7 +196,7 @@ nlohmann::json to_json(const GridSlamResult& r) {
   j["resamplings_mean"] = r.resamplings;
   j["fallbacks"] = r.fallbacks;
   j["failures"] = r.failures;
-  j["map_tolerance_m"] = r.map_tolerance_m;
+  j["map_tolerance_m"] = r.has_reference ? json(r.map_tolerance_m) : json(nullptr);
   j["map_agreement"] = maybe_stat(r.map_agreement);
   j["map_occupied_precision"] = maybe_stat(r.map_precision);
   j["map_occupied_recall"] = maybe_stat(r.map_recall);
@@ -198,10 +208,13 @@ nlohmann::json to_json(const GridSlamResult& r) {
   j["reference_map_cpu_s"] = r.reference_map_cpu_s;
   j["map_score_cpu_s"] = r.map_score_cpu_s;
   json per_run = json::array();
-  for (const auto& run : r.runs)
+  for (const auto& run : r.runs) {
+    const auto run_scored = [&](double v) {
+      return maybe(run.has_reference ? std::optional(v) : std::nullopt);
+    };
     per_run.push_back({{"seed", run.seed},
-                       {"relation_translation_m", run.relation_translation_m},
-                       {"relation_rotation_deg", run.relation_rotation_deg},
+                       {"relation_translation_m", run_scored(run.relation_translation_m)},
+                       {"relation_rotation_deg", run_scored(run.relation_rotation_deg)},
                        {"ate_m", maybe(run.ate_m)},
                        {"cpu_ms_per_scan", run.cpu_ms_per_scan},
                        {"resamplings", run.resamplings},
@@ -209,6 +222,7 @@ nlohmann::json to_json(const GridSlamResult& r) {
                        {"map_occupied_precision", maybe(run.map.precision)},
                        {"map_occupied_recall", maybe(run.map.recall)},
                        {"map_f1", maybe(run.map.f1)}});
+  }
   j["per_run"] = per_run;
   return j;
 }

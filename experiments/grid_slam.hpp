@@ -44,6 +44,9 @@ struct MapFractions {
 /// One run's numbers (the trajectory and map only for the first run, in GridSlamResult::first).
 struct GridSlamRunRecord {
   std::uint64_t seed = 0;
+  /// False with recorded odometry (no reference): the relation errors below are then not
+  /// scores, and to_json writes them as null.
+  bool has_reference = true;
   double relation_translation_m = 0.0, relation_rotation_deg = 0.0;
   double odometry_translation_m = 0.0, odometry_rotation_deg = 0.0;
   double cpu_ms_per_scan = 0.0;
@@ -65,8 +68,9 @@ struct GridSlamStat {
 struct GridSlamResult {
   GridSlamSettings settings;
   std::size_t scans_processed =
-      0;                     ///< per run (the same for every seed: the gate is the reference's)
-  double log_seconds = 0.0;  ///< time spanned by the processed scans
+      0;                      ///< per run (the same for every seed: the gate is the reference's)
+  double log_seconds = 0.0;   ///< time spanned by the processed scans
+  bool has_reference = true;  ///< false with recorded odometry: the relation errors are not scores
   std::vector<GridSlamRunRecord> runs;
   GridSlamStat relation_translation_m, relation_rotation_deg, cpu_ms_per_scan;
   double odometry_translation_m = 0.0, odometry_rotation_deg = 0.0;  ///< means over the runs

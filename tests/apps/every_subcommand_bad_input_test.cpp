@@ -112,6 +112,9 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
         {"slam --sensor laser --g2o ''", 2, {"--g2o"}},
         {"slam --sensor laser --g2o DIR/gone/g.g2o", 2, {"--g2o", "gone"}},
         {"slam --g2o DIR/g.g2o", 2, {"--g2o", "--sensor laser"}},
+        {"slam --scan-topic /scan", 2, {"--scan-topic", "--sensor laser"}},
+        {"slam --sensor laser --data DIR/a.log --odom-topic ''", 2, {"--odom-topic"}},
+        {"slam --sensor laser --data DIR/a.log --laser-frame l", 1, {"--laser-frame", "a.log"}},
         {"slam --sensor laser --data DIR/gone.log.gz", 1, {"gone.log.gz"}}}},
       {"slit", {{"slit --runs 0", 2, {"--runs"}}, {"slit --mode nope", 2, {"--mode", "nope"}}}},
   };

@@ -121,13 +121,19 @@ GridSlamRun run_grid_slam(const robot::CarmenLog& log, const GridSlamRunOptions&
   const std::size_t n =
       options.max_scans > 0 ? std::min(options.max_scans, log.scans.size()) : log.scans.size();
   // The protocol's updates: where the reference moved or turned by the gate since the last one;
-  // the odometry between them is the reference increment perturbed by the alphas.
+  // the odometry between them is the reference increment perturbed by the alphas. Recorded
+  // odometry is gated and used as it is (GMapping gates on odometry too).
+  const bool recorded = options.odometry == GridOdometrySource::kRecorded;
   std::vector<std::size_t> used{0};
   for (std::size_t k = 1; k < n; ++k)
     if (options.filter.gate.due(log.laser_poses[used.back()], log.laser_poses[k]))
       used.push_back(k);
   std::vector<robot::Pose> odometry{log.laser_poses[0]};
   for (std::size_t i = 1; i < used.size(); ++i) {
+    if (recorded) {
+      odometry.push_back(log.laser_poses[used[i]]);
+      continue;
+    }
     Rng rng({.seed = options.data_seed, .step = i, .purpose = purpose::kData});
     const robot::Pose inc = robot::between(log.laser_poses[used[i - 1]], log.laser_poses[used[i]]);
     odometry.push_back(
@@ -155,8 +161,13 @@ GridSlamRun run_grid_slam(const robot::CarmenLog& log, const GridSlamRunOptions&
   run.mean_ess = ess / steps;
   run.mean_evaluations = evaluations / steps;
   run.trajectory = filter.best_trajectory();
-  for (std::size_t k : used) run.reference.push_back({log.scans[k].time, log.laser_poses[k]});
   run.map = filter.best_map().to_occupancy_grid();
+  if (recorded) {
+    run.has_reference = false;
+    run.odometry = std::move(odometry);
+    return run;
+  }
+  for (std::size_t k : used) run.reference.push_back({log.scans[k].time, log.laser_poses[k]});
   // Relations between consecutive processed scans, matched by their index (the bundled logs'
   // scan times are not always increasing: Intel's go back by 0.11 s once).
   std::vector<double> times;

@@ -36,6 +36,16 @@ std::shared_ptr<const GridProposal> make_grid_proposal(
     GridProposalKind kind, const ImplicitGridOptions& implicit = {},
     const ScanMatchProposalOptions& scan_match = {});
 
+/// Where the filter's odometry comes from.
+enum class GridOdometrySource {
+  /// The semi-synthetic protocol: the log's laser poses are the reference, and the odometry is
+  /// their increments perturbed by the alphas.
+  kSynthesised,
+  /// The log's laser poses are the robot's own odometry (a ROS bag's, robot/bag.hpp), used as
+  /// recorded: the run has no reference, so no score that needs one (relations, ATE, map).
+  kRecorded,
+};
+
 struct GridSlamRunOptions {
   /// The filter; its gate is the protocol's (applied to the reference poses) and its alphas
   /// both synthesise the odometry and drive the motion model.
@@ -49,6 +59,7 @@ struct GridSlamRunOptions {
   GridProposalKind proposal = GridProposalKind::kImplicit;
   ImplicitGridOptions implicit;
   ScanMatchProposalOptions scan_match;
+  GridOdometrySource odometry = GridOdometrySource::kSynthesised;
   std::uint64_t data_seed = 1;  ///< the odometry's noise: stream (data_seed, scan, 0, data)
   std::size_t max_scans = 0;    ///< 0: every scan of the log; else the first max_scans
   /// Score the best particle's map, and the dead-reckoning map, against the reference map
@@ -62,7 +73,8 @@ struct GridSlamRunOptions {
 
 struct GridSlamRun {
   std::vector<GridSlamPose> trajectory;  ///< the best particle's, at the processed scans
-  std::vector<GridSlamPose> reference;   ///< the corrected poses at the same scans
+  /// The corrected poses at the same scans; empty with recorded odometry (no reference).
+  std::vector<GridSlamPose> reference;
   /// The odometry the filter was given at the same scans (its motion input): the increments of
   /// the pose graph (robot/pose_graph.hpp).
   std::vector<robot::Pose> odometry;
@@ -70,6 +82,9 @@ struct GridSlamRun {
   /// Kümmerle et al.'s relation metric over consecutive processed scans, the reference's
   /// relative motions as the relations.
   robot::RelationErrors relations;
+  /// False with recorded odometry: the relation errors are then empty (not zero errors), and
+  /// ate_m and the map scores nullopt.
+  bool has_reference = true;
   /// The same for the synthesised odometry itself (dead reckoning): what the scans improve on.
   robot::RelationErrors odometry_relations;
   /// Absolute trajectory error [m]: the RMSE of the best trajectory's positions against the
