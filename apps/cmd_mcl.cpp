@@ -24,6 +24,8 @@ struct MclCommand {
   CLI::Option* particles = nullptr;  ///< -M, to tell a given count from the default
   LaserCommand laser;
   std::string map;  ///< --map: linear|random (landmark), or a map file (laser)
+  /// The choices of the landmark runs as given, parsed by experiments/choices.hpp.
+  std::string config = "A", implicit_map = "linear", sigma2 = "variance", truth = "gps";
 };
 
 /// The options of global localization, kidnapping, recovery and KLD-sampling (spec §3.11).
@@ -88,6 +90,86 @@ void add_global_options(CLI::App& sub, MclSettings& s) {
       ->capture_default_str();
 }
 
+/// The landmark or laser runs of `implicit mcl` once the flags are parsed, and their printout.
+void run_mcl_command(MclCommand& cmd, CLI::App& sub, const CLI::Option* sensor) {
+  ThreadLimit limit(cmd.ctx.threads);
+  if (!cmd.laser.params.empty()) {
+    // nav2's AMCL localizes with a laser: its parameters imply --sensor laser.
+    if (sensor->count() == 0) cmd.laser.sensor = "laser";
+    require(cmd.laser.sensor == "laser",
+            "mcl --params: nav2's AMCL parameters apply to --sensor laser, got --sensor {}",
+            cmd.laser.sensor);
+    cmd.laser.params_record =
+        apply_nav2_params(sub, cmd.laser.params, robot::is_bag(cmd.settings.data_dir));
+  }
+  // --implicit-map is the implicit proposal's map for both sensors (for landmarks --map too).
+  cmd.settings.map = experiments::parse_implicit_map(cmd.implicit_map);
+  if (cmd.laser.sensor == "laser") {
+    run_laser_mcl_command(cmd.settings, cmd.map, cmd.laser, cmd.ctx, cmd.allow_empty);
+    return;
+  }
+  if (!cmd.map.empty()) {
+    require(cmd.map == "linear" || cmd.map == "random",
+            "mcl: --map takes a map file only with --sensor laser; for landmarks it is "
+            "the implicit proposal's map, linear or random, got '{}'",
+            cmd.map);
+    cmd.implicit_map = cmd.map;
+  }
+  cmd.settings.config = experiments::parse_noise_config(cmd.config);
+  cmd.settings.map = experiments::parse_implicit_map(cmd.implicit_map);
+  cmd.settings.sigma2 = experiments::parse_sigma2(cmd.sigma2);
+  cmd.settings.truth = experiments::parse_mcl_truth(cmd.truth);
+  cmd.settings.allow_empty = cmd.allow_empty;
+  cmd.settings.trajectory = cmd.laser.trajectory;
+  cmd.settings.truth_trajectory = cmd.laser.truth_trajectory;
+  // M = 100 is the tracking default; started without a pose it finds the car in too few runs,
+  // so a global start without -M adapts its count by KLD-sampling (spec §3.11).
+  if (cmd.settings.init == "global" && cmd.particles->count() == 0) cmd.settings.kld = true;
+  const auto r = run_mcl(cmd.settings, cmd.ctx);
+  const auto check = [&] {
+    require_scored(r, "mcl", {"error_percent_mean", "rmse_m"}, {}, cmd.allow_empty);
+  };
+  if (cmd.ctx.json) {
+    print_json(r);
+    if (!r.contains("global_success_rate") && !r.contains("kidnap_recovery_rate")) check();
+    return;
+  }
+  if (r.contains("global_success_rate") || r.contains("kidnap_recovery_rate")) {
+    const bool kidnap = r.contains("kidnap_recovery_rate");
+    const double rate = r[kidnap ? "kidnap_recovery_rate" : "global_success_rate"].get<double>();
+    fmt::print(
+        "MCL {} {} M = {}, {}: {} rate {}, median time {:.1f} s, particles {:.0f} "
+        "(peak {:.0f}), {:.4f} ms per step\n",
+        kidnap ? "kidnapping" : "global start", r["method"].get<std::string>(),
+        r["particles"].get<int>(), counted(r["runs"].get<int>(), "run", "runs"),
+        kidnap ? "recovery" : "success",
+        std::isfinite(rate) ? fmt::format("{:.2f}", rate) : "n/a (nothing was tested)",
+        r[kidnap ? "recovery_time_s_median" : "time_to_converge_s_median"].get<double>(),
+        r["particles_mean"].get<double>(), r["particles_peak"].get<double>(),
+        r["cpu_ms_per_step"].get<double>());
+    return;
+  }
+  // Configs A and B are the Car Park's two noise settings of the Ute; another log says which
+  // log and model it ran with (a unicycle has no config).
+  const std::string& data = cmd.settings.data_dir;
+  const std::string model = r["model"].get<std::string>();
+  const std::string setting =
+      data.empty() || std::filesystem::is_directory(data)
+          ? fmt::format("config {}", r["config"].get<std::string>())
+          : fmt::format("log {}, {} model{}", data, model,
+                        model == "ute" ? ", config " + r["config"].get<std::string>() : "");
+  fmt::print(
+      "MCL {} M = {}, {}, {}:\n"
+      "  err% = {:.2f} ± {:.2f} (median {:.2f}), RMSE {:.3f} m, heading RMSE {:.4f} rad\n"
+      "  lost runs {}, ESS/M {:.2f}, {:.4f} ms per step, {:.1f} s\n",
+      r["method"].get<std::string>(), r["particles"].get<int>(), setting,
+      counted(r["runs"].get<int>(), "run", "runs"), r["error_percent_mean"].get<double>(),
+      r["error_percent_std"].get<double>(), r["error_percent_median"].get<double>(),
+      r["rmse_m"].get<double>(), r["heading_rmse_rad"].get<double>(), r["lost_runs"].get<int>(),
+      r["ess_mean"].get<double>(), r["cpu_ms_per_step"].get<double>(), r["seconds"].get<double>());
+  check();
+}
+
 void setup_mcl(CLI::App& sub) {
   auto cmd = std::make_shared<MclCommand>();
   sub.add_option("--method", cmd->settings.method,
@@ -106,7 +188,7 @@ void setup_mcl(CLI::App& sub) {
   sub.add_option("--data", cmd->settings.data_dir,
                  "A Car Park folder (carpark_*.csv) or a plain-text robot log (docs/formats.md); "
                  "default: the bundled data/carpark");
-  sub.add_option("--config", cmd->settings.config,
+  sub.add_option("--config", cmd->config,
                  "Noise setting: A = the paper's P = 0.5, B = P = 0.1 (spec §3.9)")
       ->check(CLI::IsMember({"A", "B"}))
       ->capture_default_str();
@@ -115,18 +197,18 @@ void setup_mcl(CLI::App& sub) {
       ->check(in_range(0.0, 10.0));
   sub.add_option("--q", cmd->settings.q, "State noise q1 = q2 [m] (default 0.1)")
       ->check(in_range(1e-6, 10.0));
-  sub.add_option("--implicit-map", cmd->settings.map, "Implicit proposal map: linear or random")
+  sub.add_option("--implicit-map", cmd->implicit_map, "Implicit proposal map: linear or random")
       ->check(CLI::IsMember({"linear", "random"}))
       ->capture_default_str();
   sub.add_option("--map", cmd->map,
                  "laser: the occupancy grid, a map_server YAML file (default: built from the log's "
                  "reference poses); landmark: linear or random, as --implicit-map");
-  sub.add_option("--sigma2", cmd->settings.sigma2,
+  sub.add_option("--sigma2", cmd->sigma2,
                  "Reading of Table 7's Sigma2 entries: variance (spec E27) or std")
       ->check(CLI::IsMember({"variance", "std"}))
       ->capture_default_str();
   sub.add_option(
-         "--truth", cmd->settings.truth,
+         "--truth", cmd->truth,
          "Ground truth: gps (fixes interpolated in time) or reference (a GPS-aided implicit "
          "MCL run with many particles, cached; docs/cli.md)")
       ->check(CLI::IsMember({"gps", "reference"}))
@@ -178,80 +260,8 @@ void setup_mcl(CLI::App& sub) {
                      "implicit mcl --kidnap-at 60 --kidnap-skip 10 --method standard --kld",
                      "implicit mcl --sensor laser --data data/carmen/intel-corrected.log.gz "
                      "--method implicit -M 100 --runs 10 --json"});
-  CLI::Option* sensor = sub.get_option("--sensor");
-  sub.callback([cmd, &sub, sensor] {
-    ThreadLimit limit(cmd->ctx.threads);
-    if (!cmd->laser.params.empty()) {
-      // nav2's AMCL localizes with a laser: its parameters imply --sensor laser.
-      if (sensor->count() == 0) cmd->laser.sensor = "laser";
-      require(cmd->laser.sensor == "laser",
-              "mcl --params: nav2's AMCL parameters apply to --sensor laser, got --sensor {}",
-              cmd->laser.sensor);
-      cmd->laser.params_record =
-          apply_nav2_params(sub, cmd->laser.params, robot::is_bag(cmd->settings.data_dir));
-    }
-    if (cmd->laser.sensor == "laser") {
-      run_laser_mcl_command(cmd->settings, cmd->map, cmd->laser, cmd->ctx, cmd->allow_empty);
-      return;
-    }
-    if (!cmd->map.empty()) {
-      require(cmd->map == "linear" || cmd->map == "random",
-              "mcl: --map takes a map file only with --sensor laser; for landmarks it is "
-              "the implicit proposal's map, linear or random, got '{}'",
-              cmd->map);
-      cmd->settings.map = cmd->map;
-    }
-    cmd->settings.allow_empty = cmd->allow_empty;
-    cmd->settings.trajectory = cmd->laser.trajectory;
-    cmd->settings.truth_trajectory = cmd->laser.truth_trajectory;
-    // M = 100 is the tracking default; started without a pose it finds the car in too few runs,
-    // so a global start without -M adapts its count by KLD-sampling (spec §3.11).
-    if (cmd->settings.init == "global" && cmd->particles->count() == 0) cmd->settings.kld = true;
-    const auto r = run_mcl(cmd->settings, cmd->ctx);
-    const auto check = [&] {
-      require_scored(r, "mcl", {"error_percent_mean", "rmse_m"}, {}, cmd->allow_empty);
-    };
-    if (cmd->ctx.json) {
-      print_json(r);
-      if (!r.contains("global_success_rate") && !r.contains("kidnap_recovery_rate")) check();
-      return;
-    }
-    if (r.contains("global_success_rate") || r.contains("kidnap_recovery_rate")) {
-      const bool kidnap = r.contains("kidnap_recovery_rate");
-      const double rate = r[kidnap ? "kidnap_recovery_rate" : "global_success_rate"].get<double>();
-      fmt::print(
-          "MCL {} {} M = {}, {}: {} rate {}, median time {:.1f} s, particles {:.0f} "
-          "(peak {:.0f}), {:.4f} ms per step\n",
-          kidnap ? "kidnapping" : "global start", r["method"].get<std::string>(),
-          r["particles"].get<int>(), counted(r["runs"].get<int>(), "run", "runs"),
-          kidnap ? "recovery" : "success",
-          std::isfinite(rate) ? fmt::format("{:.2f}", rate) : "n/a (nothing was tested)",
-          r[kidnap ? "recovery_time_s_median" : "time_to_converge_s_median"].get<double>(),
-          r["particles_mean"].get<double>(), r["particles_peak"].get<double>(),
-          r["cpu_ms_per_step"].get<double>());
-      return;
-    }
-    // Configs A and B are the Car Park's two noise settings of the Ute; another log says which
-    // log and model it ran with (a unicycle has no config).
-    const std::string& data = cmd->settings.data_dir;
-    const std::string model = r["model"].get<std::string>();
-    const std::string setting =
-        data.empty() || std::filesystem::is_directory(data)
-            ? fmt::format("config {}", r["config"].get<std::string>())
-            : fmt::format("log {}, {} model{}", data, model,
-                          model == "ute" ? ", config " + r["config"].get<std::string>() : "");
-    fmt::print(
-        "MCL {} M = {}, {}, {}:\n"
-        "  err% = {:.2f} ± {:.2f} (median {:.2f}), RMSE {:.3f} m, heading RMSE {:.4f} rad\n"
-        "  lost runs {}, ESS/M {:.2f}, {:.4f} ms per step, {:.1f} s\n",
-        r["method"].get<std::string>(), r["particles"].get<int>(), setting,
-        counted(r["runs"].get<int>(), "run", "runs"), r["error_percent_mean"].get<double>(),
-        r["error_percent_std"].get<double>(), r["error_percent_median"].get<double>(),
-        r["rmse_m"].get<double>(), r["heading_rmse_rad"].get<double>(), r["lost_runs"].get<int>(),
-        r["ess_mean"].get<double>(), r["cpu_ms_per_step"].get<double>(),
-        r["seconds"].get<double>());
-    check();
-  });
+  const CLI::Option* sensor = sub.get_option("--sensor");
+  sub.callback([cmd, &sub, sensor] { run_mcl_command(*cmd, sub, sensor); });
 }
 
 const Registrar register_mcl{"mcl", "Monte Carlo localization on the Car Park data (paper Table 5)",

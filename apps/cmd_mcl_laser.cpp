@@ -177,8 +177,7 @@ void run_laser_mcl_command(const MclSettings& shared, const std::string& map_fil
   s.data.bag = l.bag.options;
   s.data.map = map_file;
   s.proposal = experiments::parse_proposal(shared.method);
-  s.implicit_map =
-      shared.map == "random" ? filter::ImplicitMap::kRandom : filter::ImplicitMap::kLinear;
+  s.implicit_map = shared.map;
   s.particles = static_cast<std::size_t>(shared.particles);
   s.runs = shared.runs;
   s.seed = ctx.seed;

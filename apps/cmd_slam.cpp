@@ -26,10 +26,52 @@ std::string metric_text(const nlohmann::json& value, int digits, const char* uni
 
 struct SlamCommand {
   SlamSettings settings;
+  std::string truth = "paper";  ///< --truth as given, parsed by experiments/choices.hpp
   RunContext ctx;
   bool allow_empty = false;
   GridSlamCommand grid;
 };
+
+/// The landmark or laser runs of `implicit slam` once the flags are parsed, and their printout.
+void run_slam_command(SlamCommand& cmd) {
+  ThreadLimit limit(cmd.ctx.threads);
+  if (cmd.grid.sensor == "laser") {
+    run_grid_slam_command(cmd.settings, cmd.grid, cmd.ctx);
+    return;
+  }
+  if (cmd.settings.method == "bootstrap" || cmd.settings.method == "gmapping")
+    throw CLI::ValidationError(
+        "--method",
+        fmt::format("{} is a grid-SLAM proposal; it needs --sensor laser", cmd.settings.method));
+  for (const CLI::Option* o : cmd.grid.laser_only)
+    if (o->count() > 0)
+      throw CLI::ValidationError(o->get_name(), "applies to grid SLAM (--sensor laser)");
+  cmd.settings.truth = experiments::parse_slam_truth(cmd.truth);
+  const auto r = run_slam(cmd.settings, cmd.ctx);
+  const auto check = [&] {
+    require_scored(r, "slam", {"error_percent_mean", "rmse_pose_m"},
+                   {"steps_per_dataset", "scored_steps_min", "landmarks_mean"}, cmd.allow_empty);
+  };
+  if (cmd.ctx.json) {
+    print_json(r);
+    check();
+    return;
+  }
+  fmt::print(
+      "SLAM {}, M = {}, {} ({} association):\n"
+      "  err% = {} ± {} (aligned {}), pose RMSE {}\n"
+      "  map RMSE {}, map shape {}, {:.1f} landmarks\n"
+      "  {:.3f} ms CPU per step, peak memory {:.1f} MB, {:.1f} s\n",
+      r["method"].get<std::string>(), r["particles"].get<int>(),
+      counted(r["datasets"].get<int>(), "data set", "data sets"),
+      r["association"].get<std::string>(), metric_text(r["error_percent_mean"], 2),
+      metric_text(r["error_percent_std"], 2), metric_text(r["error_aligned_percent_mean"], 2),
+      metric_text(r["rmse_pose_m"], 3, " m"), metric_text(r["rmse_map_m"], 3, " m"),
+      metric_text(r["map_shape_m"], 3, " m"), r["landmarks_mean"].get<double>(),
+      r["cpu_ms_per_step"].get<double>(), r["peak_memory_mb"].get<double>(),
+      r["seconds"].get<double>());
+  check();
+}
 
 void setup_slam(CLI::App& sub) {
   auto cmd = std::make_shared<SlamCommand>();
@@ -58,7 +100,7 @@ void setup_slam(CLI::App& sub) {
                  "known: true landmark ids; ml: maximum likelihood with a chi-square gate")
       ->check(CLI::IsMember({"ml", "known"}))
       ->capture_default_str();
-  sub.add_option("--truth", s.truth,
+  sub.add_option("--truth", cmd->truth,
                  "paper: noise-free truth (Table 6); consistent: truth sampled from the model "
                  "(NEES)")
       ->check(CLI::IsMember({"paper", "consistent"}))
@@ -132,44 +174,7 @@ void setup_slam(CLI::App& sub) {
                      "data/victoria_park/victoria_park.log.gz --datasets 1 --json",
                      "implicit slam --sensor laser --data data/carmen/intel-corrected.log.gz "
                      "--method implicit -M 8 --datasets 3 --map-out out/intel.yaml --json"});
-  sub.callback([cmd] {
-    ThreadLimit limit(cmd->ctx.threads);
-    if (cmd->grid.sensor == "laser") {
-      run_grid_slam_command(cmd->settings, cmd->grid, cmd->ctx);
-      return;
-    }
-    if (cmd->settings.method == "bootstrap" || cmd->settings.method == "gmapping")
-      throw CLI::ValidationError(
-          "--method",
-          fmt::format("{} is a grid-SLAM proposal; it needs --sensor laser", cmd->settings.method));
-    for (const CLI::Option* o : cmd->grid.laser_only)
-      if (o->count() > 0)
-        throw CLI::ValidationError(o->get_name(), "applies to grid SLAM (--sensor laser)");
-    const auto r = run_slam(cmd->settings, cmd->ctx);
-    const auto check = [&] {
-      require_scored(r, "slam", {"error_percent_mean", "rmse_pose_m"},
-                     {"steps_per_dataset", "scored_steps_min", "landmarks_mean"}, cmd->allow_empty);
-    };
-    if (cmd->ctx.json) {
-      print_json(r);
-      check();
-      return;
-    }
-    fmt::print(
-        "SLAM {}, M = {}, {} ({} association):\n"
-        "  err% = {} ± {} (aligned {}), pose RMSE {}\n"
-        "  map RMSE {}, map shape {}, {:.1f} landmarks\n"
-        "  {:.3f} ms CPU per step, peak memory {:.1f} MB, {:.1f} s\n",
-        r["method"].get<std::string>(), r["particles"].get<int>(),
-        counted(r["datasets"].get<int>(), "data set", "data sets"),
-        r["association"].get<std::string>(), metric_text(r["error_percent_mean"], 2),
-        metric_text(r["error_percent_std"], 2), metric_text(r["error_aligned_percent_mean"], 2),
-        metric_text(r["rmse_pose_m"], 3, " m"), metric_text(r["rmse_map_m"], 3, " m"),
-        metric_text(r["map_shape_m"], 3, " m"), r["landmarks_mean"].get<double>(),
-        r["cpu_ms_per_step"].get<double>(), r["peak_memory_mb"].get<double>(),
-        r["seconds"].get<double>());
-    check();
-  });
+  sub.callback([cmd] { run_slam_command(*cmd); });
 }
 
 const Registrar register_slam{

@@ -13,6 +13,7 @@ namespace {
 
 struct SlitCommand {
   SlitSettings settings;
+  std::string mode = "corrected", estimator = "generic";  ///< parsed by experiments/choices.hpp
   RunContext ctx;
   bool allow_empty = false;
 };
@@ -25,12 +26,12 @@ void setup_slit(CLI::App& sub) {
   sub.add_option("--runs", cmd->settings.runs, "Closed-loop runs (Table 2)")
       ->check(in_range(1, 10000000))
       ->capture_default_str();
-  sub.add_option("--mode", cmd->settings.mode,
+  sub.add_option("--mode", cmd->mode,
                  "paper: the paper's estimator (biased, reproduces Table 2); corrected: unbiased "
                  "weights with the frozen wall; plain: unbiased weights, plain FD")
       ->check(CLI::IsMember({"paper", "corrected", "plain"}))
       ->capture_default_str();
-  sub.add_option("--estimator", cmd->settings.estimator,
+  sub.add_option("--estimator", cmd->estimator,
                  "generic: the library's path integral estimator on the double slit as a "
                  "ControlProblem; wall-space: the double slit's own estimator, which samples the "
                  "wall value alone (the same runs to rounding, faster)")
@@ -49,6 +50,8 @@ void setup_slit(CLI::App& sub) {
   add_common_options(sub, cmd->ctx);
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
+    cmd->settings.mode = experiments::parse_slit_mode(cmd->mode);
+    cmd->settings.estimator = experiments::parse_slit_estimator(cmd->estimator);
     const auto r = run_slit(cmd->settings, cmd->ctx);
     const auto check = [&] {
       require_scored(r, "slit", {"error_x_mean", "error_u_mean", "crash_fraction"}, {},

@@ -19,15 +19,19 @@ using nlohmann::json;
 json to_json(const SlitSettings& s) {
   return {{"samples", s.samples},
           {"runs", s.runs},
-          {"mode", s.mode},
-          {"estimator", s.estimator},
+          {"mode", experiments::name_of(s.mode)},
+          {"estimator", experiments::name_of(s.estimator)},
           {"naive_mc_small", s.naive_mc_small},
           {"naive_mc_large", s.naive_mc_large}};
 }
 json to_json(const HimmelblauSettings& s) { return {{"runs", s.runs}, {"samples", s.samples}}; }
 json to_json(const MclSettings& s) {
-  return {{"method", s.method},     {"particles", s.particles}, {"runs", s.runs},
-          {"data_dir", s.data_dir}, {"config", s.config},       {"p", s.p}};
+  return {{"method", s.method},
+          {"particles", s.particles},
+          {"runs", s.runs},
+          {"data_dir", s.data_dir},
+          {"config", experiments::name_of(s.config)},
+          {"p", s.p}};
 }
 /// The mcl keys plus the global-start and kidnapping ones (the plain mcl configs keep theirs).
 json global_json(const MclSettings& s) {
@@ -41,8 +45,9 @@ json global_json(const MclSettings& s) {
   return j;
 }
 json to_json(const SlamSettings& s) {
-  return {{"method", s.method},          {"particles", s.particles},     {"datasets", s.datasets},
-          {"data_dir", s.data_dir},      {"association", s.association}, {"truth", s.truth},
+  return {{"method", s.method},           {"particles", s.particles},
+          {"datasets", s.datasets},       {"data_dir", s.data_dir},
+          {"association", s.association}, {"truth", experiments::name_of(s.truth)},
           {"laser_every", s.laser_every}};
 }
 
@@ -127,7 +132,7 @@ void add_slit(Plan& plan, bool quick) {
       SlitSettings s;
       s.samples = m;
       s.runs = runs;
-      s.mode = mode;
+      s.mode = experiments::parse_slit_mode(mode);
       plan.configs.push_back({"slit", fmt::format("slit {} M={}", mode, m), to_json(s),
                               runs * (0.002 + 1e-4 * m), mode == "corrected" && m == 50,
                               [s](const RunContext& ctx) { return run_slit(s, ctx); }});
@@ -140,9 +145,9 @@ void add_arm(Plan& plan, bool quick) {
   // estimator, whose controls it gives to 1e-7 (tests/apps/arm_experiment_test.cpp) at a
   // hundredth of the cost (a minute under the sanitizers).
   ArmSettings arm;
-  if (quick) arm.estimator = "closed-form";
-  plan.settings["arm"] =
-      json::object({{"parameters", "specification §2.5.4"}, {"estimator", arm.estimator}});
+  if (quick) arm.estimator = control::ArmController::kClosedForm;
+  plan.settings["arm"] = json::object(
+      {{"parameters", "specification §2.5.4"}, {"estimator", experiments::name_of(arm.estimator)}});
   plan.configs.push_back({"arm", "arm", json::object(), 0.5, true,
                           [arm](const RunContext& ctx) { return run_arm(arm, ctx); }});
 }
@@ -197,7 +202,7 @@ void add_mcl(Plan& plan, bool quick) {
       s.method = sw.method;
       s.particles = m;
       s.runs = sw.runs;
-      s.config = sw.config;
+      s.config = experiments::parse_noise_config(sw.config);
       const bool figure = sw.config == "A" && sw.method == "implicit" && m == 100;
       plan.configs.push_back({"mcl", fmt::format("mcl {} M={} config {}", sw.method, m, sw.config),
                               to_json(s),

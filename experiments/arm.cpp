@@ -14,10 +14,7 @@ namespace implicit::experiments {
 
 nlohmann::json run_arm(const ArmSettings& s, const RunContext& ctx) {
   const auto start = std::chrono::steady_clock::now();
-  require(s.estimator == "closed-form" || s.estimator == "generic",
-          "arm --estimator: expected 'closed-form' or 'generic', got '{}'", s.estimator);
-  const auto controller = s.estimator == "generic" ? control::ArmController::kGeneric
-                                                   : control::ArmController::kClosedForm;
+  const control::ArmController controller = s.estimator;
   const control::ArmProblem problem;   // spec §2.5.4
   const control::ArmParameters plant;  // Table 3
   control::ArmParameters wrong = plant;
@@ -51,7 +48,7 @@ nlohmann::json run_arm(const ArmSettings& s, const RunContext& ctx) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return {
-      {"estimator", s.estimator},
+      {"estimator", name_of(s.estimator)},
       {"lqr_max_abs_diff", std::max(exact.lqr_max_abs_diff, biased.lqr_max_abs_diff)},
       {"lqr_max_abs_diff_semi_implicit", semi_sim.lqr_max_abs_diff},
       {"final_angle_error_exact_rad", exact.final_angle_error},

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "experiments/choices.hpp"
 #include "experiments/run_context.hpp"
 #include "experiments/run_record.hpp"
 
@@ -22,13 +23,14 @@ namespace implicit::experiments {
 
 // ---- Path integral control (paper §3) -------------------------------------------------------
 struct SlitSettings {
-  int samples = 50;                ///< M, samples per psi estimate
-  int runs = 500;                  ///< closed-loop runs (Table 2)
-  std::string mode = "corrected";  ///< "paper" (estimator P) or "corrected" (W2, frozen wall)
+  int samples = 50;  ///< M, samples per psi estimate
+  int runs = 500;    ///< closed-loop runs (Table 2)
+  /// "paper" (estimator P), "corrected" (W2, frozen wall) or "plain" (parse_slit_mode)
+  control::SlitEstimator mode = control::SlitEstimator::kFrozenWall;
   /// "generic" (the library's path integral estimator on the double slit as a ControlProblem) or
   /// "wall-space" (DoubleSlit's own estimator, one scalar per sample: the same table to
   /// rounding, faster)
-  std::string estimator = "generic";
+  SlitImplementation estimator = SlitImplementation::kGeneric;  ///< parse_slit_estimator
   int naive_mc_small = 5000;  ///< plain Monte Carlo paths (Figure 1)
   int naive_mc_large = 100000;
 };
@@ -40,7 +42,7 @@ struct ArmSettings {
   /// "generic" (the library's estimator on each joint as a ControlProblem with partial noise) or
   /// "closed-form" (joint_path_integral, O(n) per joint: the same controls to 1e-7, 100 times
   /// faster). The semi-implicit check always uses the closed form, which alone has that scheme.
-  std::string estimator = "generic";
+  control::ArmController estimator = control::ArmController::kGeneric;  ///< parse_arm_estimator
 };
 /// Keys: estimator, lqr_max_abs_diff, lqr_max_abs_diff_semi_implicit,
 /// final_angle_error_exact_rad, final_angle_error_wrong_model_rad, seconds, ...

@@ -150,7 +150,7 @@ struct MclSetup {
 
 robot::RangeBearingSensor mcl_sensor(const MclSettings& s) {
   const double sr = 0.05, sb = 0.05 * kPi / 180.0;  // Table 7's Sigma2 entries
-  robot::RangeBearingSensor sensor = s.sigma2 == "variance"
+  robot::RangeBearingSensor sensor = s.sigma2 == Sigma2Reading::kVariance
                                          ? robot::RangeBearingSensor(sr, sb)
                                          : robot::RangeBearingSensor::from_std(sr, sb);
   if (s.range_sd > 0 || s.bearing_sd_deg > 0) {
@@ -190,16 +190,8 @@ void write_mcl_tum_files(const MclSettings& s, const LocalizationProblem& proble
 nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   require(s.method == "standard" || s.method == "implicit",
           "mcl --method: expected 'standard' or 'implicit', got '{}'", s.method);
-  require(s.config == "A" || s.config == "B", "mcl --config: expected 'A' or 'B', got '{}'",
-          s.config);
-  require(s.map == "linear" || s.map == "random",
-          "mcl --map: expected 'linear' or 'random', got '{}'", s.map);
-  require(s.sigma2 == "variance" || s.sigma2 == "std",
-          "mcl --sigma2: expected 'variance' or 'std', got '{}'", s.sigma2);
   require(s.particles >= 1, "mcl --particles: expected >= 1, got {}", s.particles);
   require(s.runs >= 1, "mcl --runs: expected >= 1, got {}", s.runs);
-  require(s.truth == "gps" || s.truth == "reference",
-          "mcl --truth: expected 'gps' or 'reference', got '{}'", s.truth);
   require(s.gps_std > 0 && std::isfinite(s.gps_std), "mcl --gps-std: expected > 0, got {}",
           s.gps_std);
   require(s.reference_particles >= 1, "mcl --reference-particles: expected >= 1, got {}",
@@ -224,7 +216,7 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   const robot::RangeBearingSensor sensor = mcl_sensor(s);
   nlohmann::json j;
   if (setup.model_name == "unicycle") {
-    require(s.truth == "gps",
+    require(s.truth == MclTruth::kGps,
             "mcl --truth reference: the GPS-aided reference run is the Car Park's (--model ute), "
             "got --model unicycle");
     const robot::UnicycleParams up = unicycle_params(setup.log, noise);
@@ -235,7 +227,7 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
   }
   // Models (spec §3.1, §3.2, §3.9): config A is the paper's P = 0.5, config B P = 0.1.
   robot::UteParams params;
-  setup.p = s.p >= 0 ? s.p : (s.config == "A" ? 0.5 : 0.1);
+  setup.p = s.p >= 0 ? s.p : (s.config == NoiseConfig::kA ? 0.5 : 0.1);
   params.control_std = Vec<2>(setup.p, setup.p);
   if (s.q >= 0) params.state_std.head<2>() = Vec<2>(s.q, s.q);
   params = ute_params(setup.log, noise, params);
@@ -339,9 +331,10 @@ std::string runs_key(const MclSettings& s, const RunContext& ctx, const MclSetup
       "gps_std={:a} reference_M={} data={} model={} control_sd={:a} state_sd={:a} label_gate={:a} "
       "range_sd={:a} "
       "bearing_sd={:a}",
-      ctx.seed, s.method, s.particles, s.config, setup.p, s.q, s.map, s.clutter, s.sigma2, s.truth,
-      s.gps_std, s.reference_particles, s.data_dir, setup.model_name, fmt::join(s.control_sd, ","),
-      fmt::join(s.state_sd, ","), s.label_gate, s.range_sd, s.bearing_sd_deg);
+      ctx.seed, s.method, s.particles, name_of(s.config), setup.p, s.q, name_of(s.map), s.clutter,
+      name_of(s.sigma2), name_of(s.truth), s.gps_std, s.reference_particles, s.data_dir,
+      setup.model_name, fmt::join(s.control_sd, ","), fmt::join(s.state_sd, ","), s.label_gate,
+      s.range_sd, s.bearing_sd_deg);
 }
 
 /// The beacon extraction and the sensor model against the survey: every detection placed in the
@@ -401,8 +394,8 @@ void add_data_json(nlohmann::json& j, const MclSettings& s, const MclSummary& m,
 
 void add_truth_json(nlohmann::json& j, const MclSettings& s, const ReferenceTruth& ref,
                     const std::vector<robot::DetectionResidual>& residuals) {
-  j["ground_truth"] = s.truth;
-  if (s.truth == "gps") {
+  j["ground_truth"] = name_of(s.truth);
+  if (s.truth == MclTruth::kGps) {
     j["ground_truth_detail"] = "GPS fixes interpolated linearly to the step times";
   } else {
     j["ground_truth_detail"] = fmt::format(
@@ -419,7 +412,7 @@ void add_truth_json(nlohmann::json& j, const MclSettings& s, const ReferenceTrut
   const double within = static_cast<double>(
       std::count_if(distances.begin(), distances.end(), [](double d) { return d < 0.5; }));
   j["detection_check"] = {
-      {"pose", s.truth == "reference" ? "reference track" : "GPS track"},
+      {"pose", s.truth == MclTruth::kReference ? "reference track" : "GPS track"},
       {"detections_placed", distances.size()},  // those with a truth heading
       {"distance_to_nearest_beacon_median_m", median_of(distances)},
       {"within_0_5_m_fraction", within / static_cast<double>(distances.size())}};
@@ -448,9 +441,9 @@ void write_mcl_csv(const MclSettings& s, const RunContext& ctx, double p, const 
            "error_percent_median,rmse_m,heading_rmse_rad,lost_runs,ess_mean,cpu_ms_per_step,"
            "seed\n";
   out << fmt::format("{},{},{},{},{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{},{:.6f},{:.6f},{}\n",
-                     s.method, s.particles, s.runs, s.config, p, mean_of(m.err), sd_of(m.err),
-                     median_of(m.err), mean_of(m.rmse), mean_of(m.hrmse), m.lost, mean_of(m.ess),
-                     mean_of(m.cpu), ctx.seed);
+                     s.method, s.particles, s.runs, name_of(s.config), p, mean_of(m.err),
+                     sd_of(m.err), median_of(m.err), mean_of(m.rmse), mean_of(m.hrmse), m.lost,
+                     mean_of(m.ess), mean_of(m.cpu), ctx.seed);
   summary.commit();
   OutputFile beacons(ctx.csv_path("mcl_beacons.csv"));
   std::ostream& b = beacons.stream();
@@ -469,7 +462,7 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   warn_skipped_scans("mcl", s.data_dir.empty() ? "data/carpark" : s.data_dir, problem.schedule,
                      model.dt());
   const ReferenceTruth ref =
-      s.truth == "reference" ? use_reference_truth(problem, s, ctx) : ReferenceTruth{};
+      s.truth == MclTruth::kReference ? use_reference_truth(problem, s, ctx) : ReferenceTruth{};
   if (s.init != "known" || s.kidnap_at >= 0) return run_mcl_global(s, ctx, model, sensor, problem);
 
   filter::FilterOptions options;
@@ -477,8 +470,7 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   options.association.clutter = s.clutter;
   options.association.label_gate = s.label_gate;
   filter::ImplicitProposal implicit_proposal;
-  implicit_proposal.map =
-      s.map == "random" ? filter::ImplicitMap::kRandom : filter::ImplicitMap::kLinear;
+  implicit_proposal.map = s.map;
   ProgressBar bar(fmt::format("mcl {} M={}", s.method, s.particles),
                   static_cast<std::size_t>(s.runs), ctx.show_progress());
   auto run_number = [&](std::size_t r) {
@@ -513,7 +505,8 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
               [&](std::size_t a, std::size_t b) { return m.err[a] < m.err[b]; });
     const std::size_t median_run = order[(order.size() - 1) / 2];
     std::string name = fmt::format("mcl_{}_M{}", s.method, s.particles);
-    if (s.config != "A" || s.p >= 0) name += fmt::format("_config{}", s.config);
+    if (s.config != NoiseConfig::kA || s.p >= 0)
+      name += fmt::format("_config{}", name_of(s.config));
     if (s.p >= 0) name += fmt::format("_p{}", s.p);
     write_trajectory(ctx.csv_path(name + "_trajectory.csv"), problem, run_number(median_run));
   }
@@ -531,17 +524,17 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
       std::chrono::duration<double>(std::chrono::steady_clock::now() - setup.start).count();
   nlohmann::json j;
   j["method"] = s.method;
-  if (s.method == "implicit") j["map"] = s.map;
+  if (s.method == "implicit") j["map"] = name_of(s.map);
   j["particles"] = s.particles;
   j["runs"] = s.runs;
-  j["config"] = s.config;
+  j["config"] = name_of(s.config);
   j["model"] = setup.model_name;
   j["p"] = setup.p;
   j["q"] = model.params().state_std(0);
   j["control_sd"] = {model.params().control_std(0), model.params().control_std(1)};
   j["state_sd"] = {model.params().state_std(0), model.params().state_std(1),
                    model.params().state_std(2)};
-  j["sigma2"] = s.sigma2;
+  j["sigma2"] = name_of(s.sigma2);
   j["clutter"] = s.clutter;
   j["seed"] = ctx.seed;
   j["threads"] = active_threads();

@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "experiments/choices.hpp"
 #include "experiments/run_context.hpp"
 #include "experiments/run_record.hpp"
 #include "implicit/robot/landmark_observation.hpp"
@@ -27,18 +28,18 @@ struct MclSettings {
   std::string method = "implicit";  ///< "standard" (bootstrap) or "implicit"
   int particles = 100;
   int runs = 20;
-  std::string data_dir;        ///< empty: the bundled Car Park data
-  std::string config = "A";    ///< noise setting: "A" (P = 0.5) or "B" (P = 0.1)
-  double p = -1.0;             ///< override P (both diagonal entries); < 0: from config
-  double q = -1.0;             ///< override Q position entries q1 = q2 [m]; < 0: 0.1
-  std::string map = "linear";  ///< implicit proposal: "linear" or "random" map
-  bool clutter = true;         ///< dropped detections contribute the clutter density p0
+  std::string data_dir;                  ///< empty: the bundled Car Park data
+  NoiseConfig config = NoiseConfig::kA;  ///< "A" (P = 0.5) or "B" (P = 0.1)
+  double p = -1.0;                       ///< override P (both diagonal entries); < 0: from config
+  double q = -1.0;                       ///< override Q position entries q1 = q2 [m]; < 0: 0.1
+  filter::ImplicitMap map = filter::ImplicitMap::kLinear;  ///< the implicit proposal's map
+  bool clutter = true;  ///< dropped detections contribute the clutter density p0
   /// Labelled detections: chi-square gate on d^2 against the prediction; 0 = trust every label.
   double label_gate = robot::kLabelGateDefault;
-  std::string sigma2 = "variance";  ///< reading of Table 7's Sigma2: "variance" or "std"
-  std::string trajectory;           ///< TUM file of run 0's estimate (empty: none)
+  Sigma2Reading sigma2 = Sigma2Reading::kVariance;  ///< reading of Table 7's Sigma2
+  std::string trajectory;                           ///< TUM file of run 0's estimate (empty: none)
   std::string truth_trajectory;     ///< TUM file of the truth the runs are scored against
-  std::string truth = "gps";        ///< ground truth: "gps" or "reference" (GPS-aided MCL run)
+  MclTruth truth = MclTruth::kGps;  ///< ground truth: GPS, or a GPS-aided MCL run
   double gps_std = 0.5;             ///< [m] GPS std assumed by the reference run
   int reference_particles = 5000;   ///< particles of the reference run
   std::string model;                ///< "ute" | "unicycle"; empty: what the log declares

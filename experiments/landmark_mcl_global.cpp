@@ -34,8 +34,8 @@ void check_global_settings(const MclSettings& s) {
           "mcl --kidnap-skip: expected a positive duration, got {}", s.kidnap_skip);
   require(s.kidnap_at < 0 || s.init == "known",
           "mcl --kidnap-at: kidnapping runs start from the known pose; drop --init global");
-  require(s.truth == "gps", "mcl --init global / --kidnap-at: expected --truth gps, got '{}'",
-          s.truth);
+  require(s.truth == MclTruth::kGps,
+          "mcl --init global / --kidnap-at: expected --truth gps, got '{}'", name_of(s.truth));
 }
 
 namespace {
@@ -146,8 +146,7 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
   g.init.cover_headings = s.cover_headings;
   g.global_start = s.init == "global";
   filter::ImplicitProposal implicit_proposal;
-  implicit_proposal.map =
-      s.map == "random" ? filter::ImplicitMap::kRandom : filter::ImplicitMap::kLinear;
+  implicit_proposal.map = s.map;
 
   const auto runs = static_cast<std::size_t>(s.runs);
   const std::string settings = fmt::format(
@@ -158,8 +157,9 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
       ctx.seed, s.method, s.particles, s.init, s.start_span, s.duration, s.kidnap_at, s.kidnap_skip,
       s.recovery, s.recovery_alpha_slow, s.recovery_alpha_fast, s.kidnap_probability, s.kld,
       s.kld_err, s.kld_z, s.min_particles, s.max_particles, s.cover_spacing, s.cover_headings,
-      s.map, s.clutter, s.data_dir, s.config, s.p, s.q, fmt::join(s.control_sd, ","),
-      fmt::join(s.state_sd, ","), s.sigma2, s.range_sd, s.bearing_sd_deg, s.label_gate);
+      name_of(s.map), s.clutter, s.data_dir, name_of(s.config), s.p, s.q,
+      fmt::join(s.control_sd, ","), fmt::join(s.state_sd, ","), name_of(s.sigma2), s.range_sd,
+      s.bearing_sd_deg, s.label_gate);
   ProgressBar bar(fmt::format("mcl {} {} M={}", s.init == "global" ? "global" : "kidnap", s.method,
                               s.particles),
                   runs, ctx.show_progress());

@@ -324,7 +324,7 @@ std::string runs_key(const SlamSettings& s, const RunContext& ctx, int particles
       "seed={} method={} M={} association={} truth={} laser_every={} noise_scale={:a} "
       "dense={}x{} min_range={:a} control_noise={:a} range_sd={:a} bearing_sd={:a} gate={:a} "
       "p0={:a} data={} model={} control_sd={:a} state_sd={:a}",
-      ctx.seed, s.method, particles, s.association, s.truth, s.laser_every,
+      ctx.seed, s.method, particles, s.association, name_of(s.truth), s.laser_every,
       s.consistent_noise_scale, s.dense_landmarks, s.dense_laps, s.min_range, s.control_noise,
       s.range_sd, s.bearing_sd_deg, s.gate_chi2, s.new_landmark_density, s.data_dir, model,
       fmt::join(s.control_sd, ","), fmt::join(s.state_sd, ","));
@@ -477,10 +477,8 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   const slam::SlamMethod method = slam::parse_slam_method(s.method);
   require(s.particles >= 1, "--particles: expected >= 1, got {}", s.particles);
   require(s.datasets >= 1, "--datasets: expected >= 1, got {}", s.datasets);
-  require(s.truth == "paper" || s.truth == "consistent",
-          "--truth: expected paper|consistent, got '{}'", s.truth);
   require(s.laser_every >= 1, "--laser-every: expected >= 1, got {}", s.laser_every);
-  const bool consistent = s.truth == "consistent";
+  const bool consistent = s.truth == slam::TruthMode::kConsistent;
   const bool is_ekf = method == slam::SlamMethod::kEkf;
   const int particles = is_ekf ? 1 : s.particles;
   const slam::SlamOptions base = filter_options(s, method, particles, consistent);
@@ -495,7 +493,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   auto dataset = [&](std::size_t i) {
     if (!logs.empty()) return logs[i % logs.size()];
     slam::SyntheticConfig cfg;
-    cfg.truth = consistent ? slam::TruthMode::kConsistent : slam::TruthMode::kPaper;
+    cfg.truth = s.truth;
     cfg.laser_every = s.laser_every;
     cfg.motion = base.motion;
     return slam::generate_synthetic(data.scenario, cfg, ctx.seed + i);
@@ -536,7 +534,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["particles"] = particles;
   j["datasets"] = s.datasets;
   j["association"] = s.association;
-  j["truth"] = logs.empty() ? s.truth : "log";
+  j["truth"] = logs.empty() ? std::string(name_of(s.truth)) : "log";
   j["data"] = logs.empty() ? (s.dense_landmarks > 0 ? data.scenario.name : "carpark-synthetic")
                            : data0.name;
   j["model"] = data.model;

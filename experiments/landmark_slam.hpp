@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "experiments/choices.hpp"
 #include "experiments/run_context.hpp"
 #include "experiments/run_record.hpp"
 
@@ -25,10 +26,10 @@ struct SlamSettings {
   std::string method = "implicit";  ///< ekf | fastslam1 | fastslam2 | implicit | implicit-rb
   int particles = 100;
   int datasets = 50;
-  std::string data_dir;                  ///< empty: synthetic Car Park data; else a plain-text log
-  std::string association = "known";     ///< "ml" or "known"
-  std::string truth = "paper";           ///< "paper" (noise-free) or "consistent"
-  int laser_every = 1;                   ///< laser update every k-th motion step
+  std::string data_dir;               ///< empty: synthetic Car Park data; else a plain-text log
+  std::string association = "known";  ///< "ml" or "known"
+  slam::TruthMode truth = slam::TruthMode::kPaper;  ///< "paper" (noise-free) or "consistent"
+  int laser_every = 1;                              ///< laser update every k-th motion step
   double consistent_noise_scale = 0.01;  ///< Sigma1 factor of truth and filters in "consistent"
   int dense_landmarks = 0;               ///< > 0: a dense field of this many landmarks (scaling)
   int dense_laps = 1;                    ///< route length of the dense field, in Car Park laps

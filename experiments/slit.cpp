@@ -23,14 +23,6 @@ namespace implicit::experiments {
 
 namespace {
 
-control::SlitEstimator estimator_from_mode(const std::string& mode) {
-  if (mode == "paper") return control::SlitEstimator::kPaper;
-  if (mode == "corrected") return control::SlitEstimator::kFrozenWall;
-  if (mode == "plain") return control::SlitEstimator::kPlainFd;
-  throw InvalidArgument(
-      fmt::format("slit mode: expected 'paper', 'corrected' or 'plain', got '{}'", mode));
-}
-
 // Figure 1 (left): the first `count` plain Monte Carlo walks up to the wall, every 2nd step.
 void write_unguided(OutputFile& out, const control::DoubleSlit& slit,
                     const Eigen::MatrixXd& walks) {
@@ -80,7 +72,6 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
   require(s.naive_mc_small >= 1 && s.naive_mc_large >= 1,
           "slit naive Monte Carlo: expected positive path counts, got {} and {}", s.naive_mc_small,
           s.naive_mc_large);
-  const auto estimator = estimator_from_mode(s.mode);
   const control::DoubleSlit slit;  // Table 1
   const double x0 = slit.parameters().initial_state;
 
@@ -88,24 +79,21 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
   SlitTableOptions opt;
   opt.samples = s.samples;
   opt.runs = s.runs;
-  opt.estimator = estimator;
+  opt.estimator = s.mode;
   opt.seed = ctx.seed;
-  require(s.estimator == "wall-space" || s.estimator == "generic",
-          "slit --estimator: expected 'wall-space' or 'generic', got '{}'", s.estimator);
-  opt.implementation =
-      s.estimator == "generic" ? SlitImplementation::kGeneric : SlitImplementation::kWallSpace;
+  opt.implementation = s.estimator;
   SlitTable table;
   {
-    ProgressBar progress(fmt::format("slit {} M={}", s.mode, s.samples),
+    ProgressBar progress(fmt::format("slit {} M={}", name_of(s.mode), s.samples),
                          static_cast<std::size_t>(s.runs), ctx.show_progress());
-    auto rows = distribute_runs(
-        ctx, "slit",
-        fmt::format("seed={} M={} mode={} estimator={}", ctx.seed, s.samples, s.mode, s.estimator),
-        static_cast<std::size_t>(s.runs), [&](std::size_t r) {
-          SlitTableRow row = slit_table_row(slit, opt, r);
-          progress.tick();
-          return row;
-        });
+    auto rows = distribute_runs(ctx, "slit",
+                                fmt::format("seed={} M={} mode={} estimator={}", ctx.seed,
+                                            s.samples, name_of(s.mode), name_of(s.estimator)),
+                                static_cast<std::size_t>(s.runs), [&](std::size_t r) {
+                                  SlitTableRow row = slit_table_row(slit, opt, r);
+                                  progress.tick();
+                                  return row;
+                                });
     table = summarise_slit_table(std::move(rows));
     progress.finish();
   }
@@ -126,7 +114,7 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
     write_guided(guided, slit, 50, ctx.seed);
     const auto run0 = slit_run(slit, opt, 0);
     write_run(figure2, slit, run0);
-    OutputFile out(ctx.csv_path(fmt::format("slit_runs_{}_M{}.csv", s.mode, s.samples)));
+    OutputFile out(ctx.csv_path(fmt::format("slit_runs_{}_M{}.csv", name_of(s.mode), s.samples)));
     out.print("run,error_x,error_u,crashed_exact,crashed_implicit,fallbacks,ess_mean\n");
     for (std::size_t r = 0; r < table.runs.size(); ++r) {
       const auto& row = table.runs[r];
@@ -142,8 +130,8 @@ nlohmann::json run_slit(const SlitSettings& s, const RunContext& ctx) {
   return {
       {"samples", s.samples},
       {"runs", s.runs},
-      {"mode", s.mode},
-      {"estimator", s.estimator},
+      {"mode", name_of(s.mode)},
+      {"estimator", name_of(s.estimator)},
       {"error_x_mean", 100.0 * table.error_x_mean},
       {"error_x_std", 100.0 * table.error_x_std},
       {"error_x_median", 100.0 * table.error_x_median},

@@ -144,14 +144,14 @@ experiments::MclSettings mcl_settings(const py::dict& kw) {
   s.particles = k.integer("particles");
   s.runs = k.integer("runs");
   s.data_dir = k.path("data");
-  s.config = k.text("config");
+  s.config = experiments::parse_noise_config(k.text("config"));
   s.p = k.number_or("p", -1.0);
   s.q = k.number_or("q", -1.0);
-  s.map = k.text("map");
+  s.map = experiments::parse_implicit_map(k.text("map"));
   s.clutter = k.flag("clutter");
   s.label_gate = k.number("label_gate");
-  s.sigma2 = k.text("sigma2");
-  s.truth = k.text("truth");
+  s.sigma2 = experiments::parse_sigma2(k.text("sigma2"));
+  s.truth = experiments::parse_mcl_truth(k.text("truth"));
   s.gps_std = k.number("gps_std");
   s.reference_particles = k.integer("reference_particles");
   s.model = k.text_or_empty("model");
@@ -186,7 +186,7 @@ experiments::SlamSettings slam_settings(const py::dict& kw) {
   s.datasets = k.integer("datasets");
   s.data_dir = k.path("data");
   s.association = k.text("association");
-  s.truth = k.text("truth");
+  s.truth = experiments::parse_slam_truth(k.text("truth"));
   s.laser_every = k.integer("laser_every");
   s.control_noise = k.number("control_noise");
   s.min_range = k.number("min_range");

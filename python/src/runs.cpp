@@ -69,8 +69,8 @@ void init_runs(py::module_& m) {
         experiments::SlitSettings s;
         s.samples = samples;
         s.runs = runs;
-        s.mode = mode;
-        s.estimator = estimator;
+        s.mode = experiments::parse_slit_mode(mode);
+        s.estimator = experiments::parse_slit_estimator(estimator);
         return run_json(s, run_context(seed, out, threads), &experiments::run_slit);
       },
       py::arg("samples"), py::arg("runs"), py::arg("mode"), py::arg("estimator"), py::arg("seed"),
@@ -90,7 +90,7 @@ void init_runs(py::module_& m) {
       [](const std::string& estimator, const py::object& seed, const py::object& out,
          const py::object& threads) {
         experiments::ArmSettings s;
-        s.estimator = estimator;
+        s.estimator = experiments::parse_arm_estimator(estimator);
         return run_json(s, run_context(seed, out, threads), &experiments::run_arm);
       },
       py::arg("estimator"), py::arg("seed"), py::arg("out"), py::arg("threads"));

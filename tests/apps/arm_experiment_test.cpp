@@ -11,8 +11,9 @@ using namespace implicit::experiments;
 TEST(ArmExperiment, GenericAndClosedFormGiveTheSameClosedLoop) {
   const RunContext ctx;
   ArmSettings generic, closed;
-  closed.estimator = "closed-form";
-  EXPECT_EQ(generic.estimator, "generic");  // the experiment runs on the library's estimator
+  closed.estimator = implicit::control::ArmController::kClosedForm;
+  // The experiment runs on the library's estimator.
+  EXPECT_EQ(generic.estimator, implicit::control::ArmController::kGeneric);
   const auto g = run_arm(generic, ctx), c = run_arm(closed, ctx);
   EXPECT_EQ(g["estimator"], "generic");
   EXPECT_LT(g["lqr_max_abs_diff"].get<double>(), 1e-7);
@@ -23,7 +24,12 @@ TEST(ArmExperiment, GenericAndClosedFormGiveTheSameClosedLoop) {
 }
 
 TEST(ArmExperiment, RefusesAnUnknownEstimator) {
-  ArmSettings s;
-  s.estimator = "fast";
-  EXPECT_THROW(run_arm(s, RunContext{}), implicit::InvalidArgument);
+  try {
+    parse_arm_estimator("fast");
+    ADD_FAILURE() << "no exception";
+  } catch (const implicit::InvalidArgument& e) {
+    EXPECT_STREQ(e.what(), "arm --estimator: expected 'closed-form' or 'generic', got 'fast'");
+  }
+  EXPECT_EQ(parse_arm_estimator("closed-form"), implicit::control::ArmController::kClosedForm);
+  EXPECT_EQ(name_of(parse_arm_estimator("generic")), "generic");
 }
