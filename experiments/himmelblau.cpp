@@ -46,6 +46,49 @@ control::HimmelblauRun from_record(const HimmelblauRunRecord& r) {
   return run;
 }
 
+/// Table 4 and Figure 5's data: f along the Newton path and the first runs, and every run's path.
+void write_himmelblau_csv(const RunContext& ctx, const HimmelblauSettings& s, int K,
+                          const std::vector<Vec<2>>& newton,
+                          const std::vector<control::HimmelblauRun>& runs) {
+  // The three files are renamed into place together, once all are written.
+  OutputFile table4(ctx.csv_path("table4_himmelblau.csv"));
+  OutputFile newton_csv(ctx.csv_path("figure5_newton.csv"));
+  OutputFile runs_csv(ctx.csv_path("figure5_runs.csv"));
+  {
+    OutputFile& out = table4;
+    out.print("k,newton");
+    const int shown = std::min(5, s.runs);
+    for (int r = 0; r < shown; ++r) out.print(",run{}", r + 1);
+    out.print("\n");
+    for (int k = 0; k <= K; ++k) {
+      out.print("{}", k);
+      if (k < static_cast<int>(newton.size()))
+        out.print(",{:.4f}", control::himmelblau(newton[static_cast<std::size_t>(k)]));
+      else
+        out.print(",");
+      for (int r = 0; r < shown; ++r)
+        out.print(",{:.4f}", control::himmelblau(runs[static_cast<std::size_t>(r)].x[k]));
+      out.print("\n");
+    }
+  }
+  {
+    OutputFile& out = newton_csv;
+    out.print("k,x1,x2,f\n");
+    for (std::size_t k = 0; k < newton.size(); ++k)
+      out.print("{},{:.10f},{:.10f},{:.10f}\n", k, newton[k](0), newton[k](1),
+                control::himmelblau(newton[k]));
+  }
+  {
+    OutputFile& out = runs_csv;
+    out.print("run,k,x1,x2,f\n");
+    for (std::size_t r = 0; r < runs.size(); ++r)
+      for (std::size_t k = 0; k < runs[r].x.size(); ++k)
+        out.print("{},{},{:.10f},{:.10f},{:.10f}\n", r, k, runs[r].x[k](0), runs[r].x[k](1),
+                  control::himmelblau(runs[r].x[k]));
+  }
+  for (OutputFile* f : {&table4, &newton_csv, &runs_csv}) f->commit();
+}
+
 }  // namespace
 
 nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx) {
@@ -102,45 +145,7 @@ nlohmann::json run_himmelblau(const HimmelblauSettings& s, const RunContext& ctx
   const auto [mean_f19, f19_se] = mean_se(f19);
   const auto [mean_f, final_f_se] = mean_se(final_f);
 
-  if (!ctx.out_dir.empty()) {
-    // The three files are renamed into place together, once all are written.
-    OutputFile table4(ctx.csv_path("table4_himmelblau.csv"));
-    OutputFile newton_csv(ctx.csv_path("figure5_newton.csv"));
-    OutputFile runs_csv(ctx.csv_path("figure5_runs.csv"));
-    {
-      OutputFile& out = table4;
-      out.print("k,newton");
-      const int shown = std::min(5, s.runs);
-      for (int r = 0; r < shown; ++r) out.print(",run{}", r + 1);
-      out.print("\n");
-      for (int k = 0; k <= K; ++k) {
-        out.print("{}", k);
-        if (k < static_cast<int>(newton.size()))
-          out.print(",{:.4f}", control::himmelblau(newton[static_cast<std::size_t>(k)]));
-        else
-          out.print(",");
-        for (int r = 0; r < shown; ++r)
-          out.print(",{:.4f}", control::himmelblau(runs[static_cast<std::size_t>(r)].x[k]));
-        out.print("\n");
-      }
-    }
-    {
-      OutputFile& out = newton_csv;
-      out.print("k,x1,x2,f\n");
-      for (std::size_t k = 0; k < newton.size(); ++k)
-        out.print("{},{:.10f},{:.10f},{:.10f}\n", k, newton[k](0), newton[k](1),
-                  control::himmelblau(newton[k]));
-    }
-    {
-      OutputFile& out = runs_csv;
-      out.print("run,k,x1,x2,f\n");
-      for (std::size_t r = 0; r < runs.size(); ++r)
-        for (std::size_t k = 0; k < runs[r].x.size(); ++k)
-          out.print("{},{},{:.10f},{:.10f},{:.10f}\n", r, k, runs[r].x[k](0), runs[r].x[k](1),
-                    control::himmelblau(runs[r].x[k]));
-    }
-    for (OutputFile* f : {&table4, &newton_csv, &runs_csv}) f->commit();
-  }
+  if (!ctx.out_dir.empty()) write_himmelblau_csv(ctx, s, K, newton, runs);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return {
