@@ -14,8 +14,8 @@
 namespace {
 
 namespace slam = implicit::slam;
-using implicit::robot::Control;
 using implicit::InvalidArgument;
+using implicit::robot::Control;
 using implicit::robot::Landmark;
 using implicit::robot::Pose;
 
