@@ -362,7 +362,7 @@ int finish(json& results, const RunContext& ctx, const ReproduceOptions& opt,
   write_text(dir / "results.json", results.dump(2) + "\n");
   gather_summaries(results, dir, "mcl_summary.csv");
   gather_summaries(results, dir, "slam_summary.csv");
-  // Under MPI only rank 0's figures are kept (apps/parallel_runs.hpp): the others draw none.
+  // Under MPI only rank 0's figures are kept (experiments/parallel_runs.hpp): the others draw none.
   results["figures"] = draw_figures(results, dir, opt.no_figures || experiments::rank_index() != 0,
                                     ctx.show_progress());
   results["files"] = files_of_run(results, dir);

@@ -73,7 +73,7 @@ int run_command(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Under an MPI launcher every rank runs the command; see apps/parallel_runs.hpp.
+  // Under an MPI launcher every rank runs the command; see experiments/parallel_runs.hpp.
   implicit::experiments::RankSession session(argc, argv);
   return session.finish(run_command(session.argc(), session.argv()));
 }

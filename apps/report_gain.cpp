@@ -1,5 +1,5 @@
 // The report's section beyond the paper: when the implicit proposal beats the bootstrap proposal
-// in MCL (apps/exp_proposal_gain.cpp), with the Car Park configurations as two real points.
+// in MCL (experiments/proposal_gain.cpp), with the Car Park configurations as two real points.
 #include <cmath>
 
 #include <fmt/format.h>

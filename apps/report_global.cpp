@@ -1,5 +1,5 @@
 // The report's section beyond the paper: global localization (no initial pose) and kidnapping
-// with implicit and standard MCL (apps/exp_mcl_global.cpp, spec §3.11).
+// with implicit and standard MCL (experiments/landmark_mcl_global.cpp, spec §3.11).
 #include <cmath>
 #include <string>
 

@@ -251,8 +251,8 @@ void init_data(py::module_& m) {
       [](const robot::RobotLog& log, const py::object& model) {
         require_model(model, "steps");
         const bool unicycle = py::isinstance<robot::UnicycleModel>(model);
-        // The tool's check (apps/vehicle.cpp, `implicit mcl --model`): a log drives one robot,
-        // and the other model would read its controls as something else.
+        // The tool's check (experiments/vehicle.cpp, `implicit mcl --model`): a log drives one
+        // robot, and the other model would read its controls as something else.
         experiments::resolve_model("steps", unicycle ? "unicycle" : "ute",
                                    log.vehicle ? std::optional(log.vehicle->model) : std::nullopt,
                                    log.source.empty() ? std::string("(in memory)") : log.source);

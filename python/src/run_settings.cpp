@@ -1,8 +1,8 @@
 // The settings of implicit.mcl.run and implicit.slam.run (run_settings.hpp): each keyword is
 // converted once, a number against the range of the tool's flag of the same meaning. The text
 // settings (method, config, truth, ...) are only checked to be strings here: their values are
-// checked by the experiments themselves (apps/exp_mcl.cpp, exp_slam.cpp, vehicle.cpp), the one
-// check the tool runs too, with the tool's message.
+// checked by the experiments themselves (experiments/landmark_mcl.cpp, landmark_slam.cpp,
+// vehicle.cpp), the one check the tool runs too, with the tool's message.
 #include "run_settings.hpp"
 
 #include <stdexcept>

@@ -225,7 +225,7 @@ void score_slit_run(const DoubleSlit& slit, SlitRun& run);
 /// Runs the closed loop for run number `run`: noise W_k from stream (seed, run, 0,
 /// kProcessNoise) (if `noise` is empty) and reference variables from (seed, run, k, kReference).
 /// The paper's Table 2 is statistics over many such runs: that aggregation is the experiment's,
-/// not the library's (apps/slit_table.hpp).
+/// not the library's (experiments/slit_table.hpp).
 SlitRun simulate_slit_run(const DoubleSlit& slit, int samples, SlitEstimator estimator,
                           std::uint64_t seed, std::uint64_t run,
                           SlitSampling sampling = SlitSampling::kWall,
