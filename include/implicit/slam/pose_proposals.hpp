@@ -234,8 +234,10 @@ class AnyPoseProposal {
  public:
   using Step = PoseStep<robot::RangeBearingSensor>;
 
-  template <LandmarkPoseProposal P>
-  requires(!std::same_as<std::remove_cvref_t<P>, AnyPoseProposal>)
+  // The self-exclusion comes first so that copying an AnyPoseProposal never asks whether
+  // AnyPoseProposal itself models the concept (which would recurse through this constructor).
+  template <class P>
+  requires(!std::same_as<std::remove_cvref_t<P>, AnyPoseProposal> && LandmarkPoseProposal<P>)
       AnyPoseProposal(P proposal)  // NOLINT(google-explicit-constructor): any proposal converts
       : self_(std::make_shared<const P>(std::move(proposal))),
         purpose_(P::kPurpose),
