@@ -15,6 +15,8 @@ grid: grid SLAM on a laser log, its map a numpy array), implicit.mcl.run; implic
 (occupancy grids, CARMEN logs, the likelihood field, the odometry model, a laser ParticleFilter
 and run). Control (spec §2): implicit.control.
 Trajectory scoring (APE, RPE as evo computes them): implicit.eval.
+Many runs (seeds x settings, optionally in worker processes, with a progress bar):
+multi_run(fn, seeds, settings); summarize(rows) gives the mean and standard error per group.
 Your own state-space model (numpy callbacks on all particles at once; bootstrap, implicit or
 guided proposal on the library's engine): implicit.ssm (Model, particle_filter).
 
@@ -33,12 +35,15 @@ _paths.configure()
 from ._core import SampleResult, SamplerWarning, ess, log_sum_exp, resample, sample  # noqa: E402
 from ._implicit import InvalidArgument, ParseError, __version__  # noqa: E402
 from ._implicit import ParticleFilter  # noqa: E402
+from ._multi_run import MultiRunError, RunList, multi_run, summarize  # noqa: E402
 from . import control, data, eval, laser, mcl, models, slam, ssm  # noqa: E402
 
 __all__ = [
     "InvalidArgument",
+    "MultiRunError",
     "ParseError",
     "ParticleFilter",
+    "RunList",
     "SampleResult",
     "SamplerWarning",
     "__version__",
@@ -50,8 +55,10 @@ __all__ = [
     "log_sum_exp",
     "mcl",
     "models",
+    "multi_run",
     "resample",
     "sample",
     "slam",
     "ssm",
+    "summarize",
 ]
