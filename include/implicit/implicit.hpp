@@ -1,5 +1,5 @@
 #pragma once
-// Everything: the whole public library, every layer (core, control, robot, filter, slam).
+// Everything: the whole public library, every layer (core, control, robot, filter, slam, da).
 // Including a layer's own headers instead compiles faster; tests/docs checks that this list is
 // complete.
 #include "implicit/control/controller.hpp"
@@ -41,6 +41,10 @@
 #include "implicit/core/types.hpp"
 #include "implicit/core/version.hpp"
 #include "implicit/core/weights.hpp"
+#include "implicit/da/filters.hpp"
+#include "implicit/da/lorenz.hpp"
+#include "implicit/da/model.hpp"
+#include "implicit/da/twin.hpp"
 #include "implicit/filter/filter_options.hpp"
 #include "implicit/filter/global_localization.hpp"
 #include "implicit/filter/global_run.hpp"

@@ -1,0 +1,304 @@
+#include "implicit/da/filters.hpp"
+
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include <Eigen/Cholesky>
+
+#include "implicit/core/error.hpp"
+#include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/implicit_maps.hpp"
+#include "implicit/core/newton.hpp"
+#include "implicit/core/resampling.hpp"
+#include "implicit/core/rng.hpp"
+
+namespace implicit::da {
+namespace {
+
+// Stream purposes: the regularisation and the EnKF's observation perturbations are the
+// proposal draws of their filters (neither filter draws other proposal numbers).
+constexpr std::uint64_t kJitter = purpose::kProposal;
+constexpr std::uint64_t kPerturbation = purpose::kProposal;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// The parts of the implicit filter's F that all members share in one cycle, with
+/// |y - H x|^2_{R^-1} = x^T G x - 2 b^T x + y^T R^-1 y, so that evaluating F needs no
+/// observation-sized temporaries: F(x) = 1/2 dx^T Q^-1 dx + 1/2 x^T G x - b^T x + c, dx = x - m.
+template <int N>
+struct ImplicitTerms {
+  Mat<N> q_inv, g;
+  Vec<N> b;
+  double c = 0.0;
+};
+
+template <int N>
+struct ImplicitObjective {
+  using Vector = Vec<N>;
+  using Hessian = Mat<N>;
+  const ImplicitTerms<N>* t;
+  Vector m;  ///< M(x') of this member
+
+  double evaluate(const Vector& x, Vector* grad, Hessian* hess) const {
+    const Vector dx = x - m;
+    const Vector q_dx = t->q_inv * dx;
+    const Vector gx = t->g * x;
+    if (grad) *grad = q_dx + gx - t->b;
+    if (hess) *hess = t->q_inv + t->g;
+    return 0.5 * dx.dot(q_dx) + 0.5 * x.dot(gx) - t->b.dot(x) + t->c;
+  }
+};
+
+template <int N>
+ImplicitTerms<N> implicit_terms(const Eigen::MatrixXd& q_inv, const Eigen::MatrixXd& g,
+                                const Eigen::MatrixXd& H, const Eigen::MatrixXd& R,
+                                const Eigen::VectorXd& y, double log_norm) {
+  ImplicitTerms<N> t;
+  t.q_inv = q_inv;
+  t.g = g;
+  const Eigen::VectorXd r_inv_y = R.llt().solve(y);
+  t.b = H.transpose() * r_inv_y;
+  t.c = 0.5 * y.dot(r_inv_y) + log_norm;
+  return t;
+}
+
+/// Moves x = M(x') to an implicit sample; returns its log weight (-inf and `failed` when Newton
+/// found no SPD Hessian or the random map's ray had no root).
+template <int N>
+double implicit_move(const ImplicitTerms<N>& t, Eigen::VectorXd& x, Rng& rng, ImplicitMap map,
+                     bool& failed) {
+  const ImplicitObjective<N> f{&t, x};
+  const auto r = newton_minimize<DenseFactor<N>>(f, f.m);
+  if (!r.factor_ok) {
+    failed = true;
+    return -kInf;
+  }
+  Vec<N> xi(x.size()), out(x.size());
+  rng.fill_normal(xi);
+  double log_w = -kInf;
+  if (map == ImplicitMap::kLinear) {
+    log_w = linear_map(f, r.x, r.factor, xi, out);
+  } else if (random_map(f, r.x, r.value, r.factor, xi, out, log_w) != RayStatus::kOk) {
+    failed = true;
+    return -kInf;
+  }
+  x = out;
+  return log_w;
+}
+
+double log_det(const Eigen::MatrixXd& lower_factor) {
+  return 2.0 * lower_factor.diagonal().array().log().sum();
+}
+
+}  // namespace
+
+std::string_view to_string(Method m) {
+  switch (m) {
+    case Method::kBootstrap:
+      return "bootstrap";
+    case Method::kImplicit:
+      return "implicit";
+    case Method::kEnkf:
+      return "enkf";
+    case Method::kEtkf:
+      return "etkf";
+  }
+  return "unknown";
+}
+
+Method parse_method(std::string_view name) {
+  for (auto m : {Method::kBootstrap, Method::kImplicit, Method::kEnkf, Method::kEtkf})
+    if (name == to_string(m)) return m;
+  throw InvalidArgument(fmt::format(
+      "data assimilation method: expected bootstrap, implicit, enkf or etkf, got '{}'", name));
+}
+
+void FilterOptions::validate(const Problem& p) const {
+  require(members >= 2, "ensemble filter: expected at least 2 members (N), got {}", members);
+  require(std::isfinite(jitter) && jitter >= 0.0,
+          "ensemble filter: expected a jitter std >= 0, got {}", jitter);
+  require(std::isfinite(inflation) && inflation >= 1.0,
+          "ensemble filter: expected a multiplicative inflation >= 1, got {}", inflation);
+  require(resample_threshold >= 0.0 && resample_threshold <= 1.0,
+          "ensemble filter: expected a resampling threshold N_eff/N in [0, 1], got {}",
+          resample_threshold);
+  require(method != Method::kImplicit || p.stochastic() || jitter > 0.0,
+          "implicit particle filter: the model is deterministic, so the jitter plays the role of "
+          "the model noise Q = jitter^2 I: expected a jitter > 0, got {}",
+          jitter);
+}
+
+EnsembleFilter::EnsembleFilter(Problem problem, FilterOptions options)
+    : problem_(std::move(problem)), options_(options) {
+  problem_.validate();
+  options_.validate(problem_);
+  const int n = problem_.dim(), p = problem_.obs_dim();
+  slots_.resize(static_cast<std::size_t>(options_.members));
+  for (auto& s : slots_) {
+    problem_.model->prepare(s.forecast);
+    s.noise.resize(n);
+    s.residual.resize(p);
+  }
+  lr_ = problem_.R.llt().matrixL();
+  log_det_2pi_r_ = p * kLog2Pi + log_det(lr_);
+  if (problem_.stochastic()) lq_ = problem_.Q.llt().matrixL();
+  if (options_.method == Method::kImplicit) {
+    Eigen::MatrixXd q =
+        problem_.stochastic()
+            ? problem_.Q
+            : Eigen::MatrixXd(options_.jitter * options_.jitter * Eigen::MatrixXd::Identity(n, n));
+    const Eigen::LLT<Eigen::MatrixXd> q_llt(q);
+    q_inv_ = q_llt.solve(Eigen::MatrixXd::Identity(n, n));
+    g_ = problem_.H.transpose() * problem_.R.llt().solve(problem_.H);
+    log_norm_ = 0.5 * (n * kLog2Pi + log_det(q_llt.matrixL())) + 0.5 * log_det_2pi_r_;
+  }
+  ancestors_.reserve(slots_.size());
+}
+
+void EnsembleFilter::initialize(const Eigen::VectorXd& mean, const Eigen::MatrixXd& cov) {
+  const int n = problem_.dim();
+  require(mean.size() == n && mean.allFinite(),
+          "ensemble filter: expected a finite initial mean of size {}, got size {}", n,
+          mean.size());
+  require_spd(cov, n, "initial covariance");
+  const Eigen::MatrixXd l = cov.llt().matrixL();
+  Eigen::MatrixXd members(n, options_.members);
+  for (int j = 0; j < options_.members; ++j) {
+    Rng rng({options_.seed, 0, static_cast<std::uint64_t>(j), purpose::kInitial});
+    Eigen::VectorXd z(n);
+    rng.fill_normal(z);
+    members.col(j) = mean + l * z;
+  }
+  initialize(members);
+}
+
+void EnsembleFilter::initialize(const Eigen::MatrixXd& members) {
+  require(members.rows() == problem_.dim() && members.cols() == options_.members,
+          "ensemble filter: expected {} members of size {}, got {} of size {}", options_.members,
+          problem_.dim(), members.cols(), members.rows());
+  require(members.allFinite(), "ensemble filter: expected finite initial members");
+  std::vector<Eigen::VectorXd> ps(static_cast<std::size_t>(members.cols()));
+  for (Eigen::Index j = 0; j < members.cols(); ++j)
+    ps[static_cast<std::size_t>(j)] = members.col(j);
+  engine_.assign(std::span<const Eigen::VectorXd>(ps));
+  ensemble_.resize(members.rows(), members.cols());
+  cycle_ = 0;
+  initialized_ = true;
+}
+
+Eigen::MatrixXd EnsembleFilter::members() const {
+  const auto ps = engine_.particles();
+  Eigen::MatrixXd e(problem_.dim(), static_cast<Eigen::Index>(ps.size()));
+  for (std::size_t j = 0; j < ps.size(); ++j) e.col(static_cast<Eigen::Index>(j)) = ps[j];
+  return e;
+}
+
+const Analysis& EnsembleFilter::assimilate(const Eigen::VectorXd& y) {
+  require(initialized_, "ensemble filter: initialize() must come before assimilate()");
+  require_observation(problem_, y, cycle_ + 1);
+  ++cycle_;
+  analysis_.resampled = false;
+  analysis_.sampling_failures = 0;
+  forecast_and_weigh(y);
+  if (options_.method == Method::kEnkf || options_.method == Method::kEtkf) ensemble_analysis(y);
+  read_off_and_resample();
+  return analysis_;
+}
+
+void EnsembleFilter::forecast_and_weigh(const Eigen::VectorXd& y) {
+  const auto c = static_cast<std::uint64_t>(cycle_);
+  const auto seed = options_.seed;
+  const Method method = options_.method;
+  const bool noisy = problem_.stochastic() && method != Method::kImplicit;
+  std::vector<char> failed(slots_.size(), 0);
+  ImplicitTerms<3> t3;
+  ImplicitTerms<Eigen::Dynamic> tx;
+  const bool small = problem_.dim() == 3;
+  if (method == Method::kImplicit) {
+    if (small)
+      t3 = implicit_terms<3>(q_inv_, g_, problem_.H, problem_.R, y, log_norm_);
+    else
+      tx = implicit_terms<Eigen::Dynamic>(q_inv_, g_, problem_.H, problem_.R, y, log_norm_);
+  }
+  engine_.move([&](std::size_t j, Eigen::VectorXd& x) {
+    Slot& s = slots_[j];
+    problem_.model->forecast(x, s.forecast);
+    if (noisy) {  // x += L_Q z: the model noise (the implicit filter samples it in F instead)
+      Rng rng({seed, c, j, purpose::kProcessNoise});
+      rng.fill_normal(s.noise);
+      x.noalias() += lq_ * s.noise;
+    }
+    if (method == Method::kImplicit) {
+      Rng rng({seed, c, j, purpose::kReference});
+      bool bad = false;
+      const double lw = small ? implicit_move(t3, x, rng, options_.map, bad)
+                              : implicit_move(tx, x, rng, options_.map, bad);
+      failed[j] = bad ? 1 : 0;
+      return lw;
+    }
+    if (method != Method::kBootstrap) return 0.0;
+    s.residual = y;  // log N(y; H x, R)
+    s.residual.noalias() -= problem_.H * x;
+    lr_.triangularView<Eigen::Lower>().solveInPlace(s.residual);
+    return -0.5 * (s.residual.squaredNorm() + log_det_2pi_r_);
+  });
+  for (char f : failed) analysis_.sampling_failures += f;
+}
+
+void EnsembleFilter::ensemble_analysis(const Eigen::VectorXd& y) {
+  auto ps = engine_.particles();
+  const auto m = static_cast<Eigen::Index>(ps.size());
+  for (Eigen::Index j = 0; j < m; ++j) ensemble_.col(j) = ps[static_cast<std::size_t>(j)];
+  if (options_.inflation != 1.0) {
+    const Eigen::VectorXd mean = ensemble_.rowwise().mean();
+    ensemble_ = ((ensemble_.colwise() - mean) * options_.inflation).colwise() + mean;
+  }
+  if (options_.method == Method::kEtkf) {
+    etkf_analysis(ensemble_, problem_.H, problem_.R, y);
+  } else {
+    Eigen::MatrixXd normals(problem_.obs_dim(), m);
+    for (Eigen::Index j = 0; j < m; ++j) {
+      Rng rng({options_.seed, static_cast<std::uint64_t>(cycle_), static_cast<std::uint64_t>(j),
+               kPerturbation});
+      auto col = normals.col(j);
+      rng.fill_normal(col);
+    }
+    enkf_perturbed_analysis(ensemble_, problem_.H, problem_.R, lr_, y, normals);
+  }
+  for (Eigen::Index j = 0; j < m; ++j) ps[static_cast<std::size_t>(j)] = ensemble_.col(j);
+}
+
+void EnsembleFilter::read_off_and_resample() {
+  const Method method = options_.method;
+  const bool particle = method == Method::kBootstrap || method == Method::kImplicit;
+  const auto r = engine_.reweight();  // the EnKFs' increments are 0: weights stay equal
+  const auto ps = engine_.particles();
+  const auto w = engine_.weights();
+  const int n = problem_.dim();
+  // Serial reductions in member order: the same sums for any thread count.
+  analysis_.mean.setZero(n);
+  for (std::size_t j = 0; j < ps.size(); ++j) analysis_.mean += w[j] * ps[j];
+  double var = 0.0;
+  for (std::size_t j = 0; j < ps.size(); ++j) var += w[j] * (ps[j] - analysis_.mean).squaredNorm();
+  const double m = static_cast<double>(ps.size());
+  if (!particle) var *= m / (m - 1.0);  // the EnKFs' unbiased ensemble covariance
+  analysis_.spread = std::sqrt(var / n);
+  analysis_.ess = particle ? r.ess : m;
+  if (!particle || !needs_resampling(r.ess, ps.size(), options_.resample_threshold)) return;
+  Rng rng({options_.seed, static_cast<std::uint64_t>(cycle_), 0, purpose::kResampling});
+  uniforms_.resize(uniforms_needed(ResamplingScheme::kSystematic, ps.size()));
+  for (double& u : uniforms_) u = rng.uniform();
+  resample(ResamplingScheme::kSystematic, w, uniforms_, ps.size(), ancestors_);
+  engine_.resample(ancestors_);
+  analysis_.resampled = true;
+  if (method != Method::kBootstrap || options_.jitter == 0.0) return;
+  const auto c = static_cast<std::uint64_t>(cycle_);
+  engine_.move([&](std::size_t j, Eigen::VectorXd& x) {  // regularisation: x += jitter N(0, I)
+    Rng jitter_rng({options_.seed, c, j, kJitter});
+    for (Eigen::Index i = 0; i < x.size(); ++i) x(i) += options_.jitter * jitter_rng.normal();
+    return 0.0;
+  });
+}
+
+}  // namespace implicit::da
