@@ -1,0 +1,51 @@
+#pragma once
+// Data assimilation benchmarks (`implicit da`): one filter on the Lorenz-63 setting `sakov2012`
+// or the Lorenz-96 setting `bocquet2010`, over several seeds, scored by rmse.a with a 95 %
+// confidence interval (docs/cli.md, docs/specification.md "Data assimilation"). The settings
+// are reproduced from the DAPPER benchmark tables, whose published rmse.a values are in
+// data/da/dapper_benchmarks.json.
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "experiments/run_context.hpp"
+#include "implicit/da/twin.hpp"
+
+namespace implicit::experiments {
+
+struct DaSettings {
+  std::string model = "lorenz63";  ///< lorenz63 (sakov2012) or lorenz96 (bocquet2010)
+  int dim = 10;                    ///< Lorenz-96 dimension (>= 4)
+  double forcing = 8.0;            ///< Lorenz-96 forcing F
+  std::string method = "etkf";     ///< bootstrap, implicit, enkf or etkf
+  int members = 10;
+  int seeds = 10;  ///< independent runs: seeds ctx.seed, ctx.seed + 1, ...
+  double jitter = 0.0;
+  double inflation = 1.0;
+  double resample_threshold = 0.5;
+  std::string map = "linear";  ///< implicit filter: linear or random map
+  int cycles = 0;              ///< observation cycles; 0: the setting's own (1000 or 1280)
+};
+
+/// The problem and twin settings of a benchmark setting for `seed` (the Lorenz-96 truth starts
+/// from a state spun up from F + N(0, 1) noise drawn with the seed). Throws InvalidArgument for
+/// an unknown model, a dimension below 4 or a non-finite forcing.
+struct DaSetup {
+  da::Problem problem;
+  da::TwinSettings twin;
+  std::string setting;  ///< sakov2012 or bocquet2010
+};
+DaSetup da_setup(const DaSettings& s, std::uint64_t seed);
+
+/// Keys: model, setting, dim, method, members, seeds, seed, jitter, inflation,
+/// resample_threshold, map, cycles, burn_in, rmse_a {mean, sd, ci95 [lo, hi]}, spread_a,
+/// mean_ess, ms_per_cycle, resamplings_per_run, sampling_failures, runs [{seed, rmse_a,
+/// spread_a, mean_ess, ms_per_cycle}], threads, seconds.
+nlohmann::json run_da(const DaSettings& s, const RunContext& ctx);
+
+/// The 0.975 quantile of Student's t with `df` degrees of freedom (df >= 1).
+double student_t975(int df);
+
+}  // namespace implicit::experiments
