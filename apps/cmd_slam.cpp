@@ -47,6 +47,7 @@ void run_slam_command(SlamCommand& cmd) {
     if (o->count() > 0)
       throw CLI::ValidationError(o->get_name(), "applies to grid SLAM (--sensor laser)");
   cmd.settings.truth = experiments::parse_slam_truth(cmd.truth);
+  cmd.settings.g2o = cmd.grid.g2o;  // declared with the laser flags, written by both paths
   const auto r = run_slam(cmd.settings, cmd.ctx);
   const auto check = [&] {
     require_scored(r, "slam", {"error_percent_mean", "rmse_pose_m"},
@@ -161,6 +162,14 @@ void setup_slam(CLI::App& sub) {
                  "Write the first data set's truth (its steps with a known pose) as a TUM file")
       ->check(tum_file_validator());
   add_grid_slam_options(sub, cmd->grid);
+  // --g2o is declared with the laser flags but the landmark path writes one too.
+  CLI::Option* g2o = sub.get_option("--g2o");
+  std::erase(cmd->grid.laser_only, g2o);
+  g2o->description(
+      "Write the first run's pose graph as a g2o file, for post-optimisation: its trajectory as "
+      "VERTEX_SE2 and the odometry between consecutive poses as EDGE_SE2 with the information of "
+      "the filter's motion noise; landmark SLAM adds its map as VERTEX_XY and each detection as "
+      "EDGE_SE2_XY (docs/formats.md)");
   for (const char* name :
        {"--association", "--truth", "--laser-every", "--noise-scale", "--control-noise",
         "--dense-landmarks", "--dense-laps", "--min-range", "--range-sd", "--bearing-sd",

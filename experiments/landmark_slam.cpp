@@ -317,6 +317,26 @@ SlamData load_slam_data(const SlamSettings& s, const RunContext& ctx) {
   return data;
 }
 
+/// Run i's filter options: `base` with its seed and the data set's vehicle (and, for the
+/// unicycle, its motion model).
+slam::SlamOptions run_options(const slam::SlamOptions& base, const slam::SlamDataset& d,
+                              const std::string& model, const MotionNoise& noise,
+                              std::uint64_t seed) {
+  slam::SlamOptions opt = base;
+  opt.seed = seed;
+  opt.motion.dt = d.vehicle.dt;
+  opt.motion.wheelbase = d.vehicle.wheelbase;
+  opt.motion.encoder_offset = d.vehicle.encoder_offset;
+  opt.motion.laser_forward = d.vehicle.laser_forward;
+  opt.motion.laser_left = d.vehicle.laser_left;
+  if (model == "unicycle") {
+    robot::UnicycleParams p;
+    p.dt = d.vehicle.dt;
+    opt.model = robot::UnicycleModel(unicycle_params(robot::RobotLog{}, noise, p));
+  }
+  return opt;
+}
+
 /// The settings the records depend on (parallel_runs.hpp: the key of --resume).
 std::string runs_key(const SlamSettings& s, const RunContext& ctx, int particles,
                      const std::string& model) {
@@ -508,18 +528,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   const auto records = distribute_runs(
       ctx, "slam", runs_key(s, ctx, particles, data.model), k_runs, [&](std::size_t i) {
         const slam::SlamDataset d = dataset(i);
-        slam::SlamOptions opt = base;
-        opt.seed = ctx.seed + i;
-        opt.motion.dt = d.vehicle.dt;
-        opt.motion.wheelbase = d.vehicle.wheelbase;
-        opt.motion.encoder_offset = d.vehicle.encoder_offset;
-        opt.motion.laser_forward = d.vehicle.laser_forward;
-        opt.motion.laser_left = d.vehicle.laser_left;
-        if (data.model == "unicycle") {
-          robot::UnicycleParams p;
-          p.dt = d.vehicle.dt;
-          opt.model = robot::UnicycleModel(unicycle_params(robot::RobotLog{}, noise, p));
-        }
+        const slam::SlamOptions opt = run_options(base, d, data.model, noise, ctx.seed + i);
         const slam::SlamRun run = slam::run_filter(d, opt, false, [&bar] { bar.tick(); });
         return to_record(d, run, slam::evaluate(d, run), consistent, i == 0);
       });
@@ -556,6 +565,14 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
   j["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
 
   if (rank_index() == 0) write_slam_tum_files(s, data0, runs[0].run);
+  if (!s.g2o.empty()) {
+    // Every rank builds it (cheap) so that the JSON is the same everywhere; rank 0 writes it.
+    const SlamPoseGraph g =
+        slam_pose_graph(data0, runs[0].run, run_options(base, data0, data.model, noise, ctx.seed));
+    j["g2o_point_edges"] = g.graph.point_edges.size();
+    j["g2o_detections_unassociated"] = g.unassociated;
+    if (rank_index() == 0) robot::write_g2o(s.g2o, g.graph, "slam --g2o");
+  }
   if (!ctx.out_dir.empty()) write_slam_csv(s, ctx, particles, j, c, data0, runs, is_ekf);
   return j;
 }

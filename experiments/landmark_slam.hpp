@@ -18,6 +18,9 @@
 #include "experiments/choices.hpp"
 #include "experiments/run_context.hpp"
 #include "experiments/run_record.hpp"
+#include "implicit/robot/pose_graph.hpp"
+#include "implicit/slam/evaluate.hpp"
+#include "implicit/slam/slam_filter.hpp"
 
 namespace implicit::experiments {
 
@@ -46,6 +49,7 @@ struct SlamSettings {
   std::vector<double> state_sd;       ///< motion noise sd of x, y, heading; empty: default
   std::string trajectory;             ///< TUM file of run 0's path (empty: none)
   std::string truth_trajectory;       ///< TUM file of data set 0's truth, where known
+  std::string g2o;                    ///< g2o file of run 0's pose graph and map (empty: none)
 };
 /// One data set's run of run_slam: its metrics and the filter's statistics; the path and map only
 /// for run 0 (the CSV files), the NEES per step only with the consistent truth (the band).
@@ -96,7 +100,24 @@ struct SlamRunRecord {
 /// Keys: method, particles, datasets, error_percent_mean/std, error_aligned_percent_mean,
 /// map_shape_m, ess_mean, resamplings, rmse_pose_m, rmse_pose_aligned_m, rmse_map_m, nees_mean
 /// (consistent mode), cpu_ms_per_step, peak_memory_mb, seconds. CSV:
-/// slam_<method>_M<particles>_{path,map}.csv.
+/// slam_<method>_M<particles>_{path,map}.csv. With s.g2o also g2o_point_edges and
+/// g2o_detections_unassociated (slam_pose_graph).
 nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx);
+
+/// The g2o graph of a run (the --g2o file): its path as the poses; per step n an edge n-1 -> n
+/// whose measurement is the increment the filter's motion model predicts from the estimate at
+/// n-1 with u_n, and whose information is that model's process noise (additive in the world
+/// frame) seen from pose n-1 (robot::world_noise_edge_information); the final map as landmarks;
+/// and each detection the filter used (range >= min_range) as a point edge from pose n, with the
+/// filter's sensor covariance (robot::range_bearing_point_edge). The detection's landmark: known
+/// association, the map's landmark of its id; ML, which keeps no record of its choices, the
+/// landmark nearest the detection in the metric of the sensor covariance at the estimated pose,
+/// within options.gate_chi2 (the others are left out and counted).
+struct SlamPoseGraph {
+  robot::PoseGraph2 graph;
+  std::size_t unassociated = 0;  ///< detections without a landmark: no point edge
+};
+SlamPoseGraph slam_pose_graph(const slam::SlamDataset& d, const slam::SlamRun& run,
+                              const slam::SlamOptions& options);
 
 }  // namespace implicit::experiments

@@ -108,8 +108,8 @@ TEST(GridSlamG2oCli, BadFileAndTheOtherSensorAreRefusedBeforeTheRun) {
   const Row rows[] = {
       {"slam --sensor laser --g2o '' --data " + aces, 2, "--g2o"},
       {"slam --sensor laser --g2o /no/such/folder/run.g2o --data " + aces, 2, "/no/such/folder"},
-      // The landmark path has no pose graph yet: the flag would be ignored.
-      {"slam --g2o run.g2o --datasets 1", 2, "--g2o"},
+      // The landmark path writes one too (landmark_slam_g2o_cli_test.cpp), refused alike.
+      {"slam --g2o /no/such/folder/run.g2o --datasets 1", 2, "/no/such/folder"},
   };
   for (const Row& row : rows) {
     const auto r = run_cli(row.args);
