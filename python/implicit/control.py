@@ -15,6 +15,7 @@ The closed-loop studies of the command-line tool, as dicts of its JSON:
 import json
 
 from . import _implicit
+from ._core import _count
 from ._implicit.control import DoubleSlit, himmelblau_control
 
 __all__ = ["DoubleSlit", "arm", "double_slit", "estimate_control", "himmelblau",
@@ -38,13 +39,14 @@ def estimate_control(problem, x, k=0, samples=50, estimator="corrected", seed=1,
         dict with "u" (float or (2,)), "log_psi", "ess" and diagnostics.
     """
     if isinstance(problem, DoubleSlit):
-        return problem.estimate_control(float(x), int(k), int(samples), estimator, int(seed),
-                                        int(step))
+        # Passed as given: the compiled side refuses a float count or a negative seed, naming
+        # the argument (int() would truncate 2.5 samples to 2 without a word).
+        return problem.estimate_control(x, k, samples, estimator, seed, step)
     if problem == "himmelblau":
         if estimator not in ("corrected", "implicit"):
             raise ValueError(f"estimate_control: the Himmelblau problem has one estimator "
                              f"(implicit sampling), got '{estimator}'")
-        return himmelblau_control(x, int(k), int(samples), int(seed), int(step))
+        return himmelblau_control(x, k, samples, seed, step)
     raise ValueError(f"estimate_control: problem: expected a DoubleSlit or 'himmelblau', "
                      f"got {problem!r}")
 
@@ -61,8 +63,8 @@ def double_slit(samples=50, runs=500, mode="corrected", seed=1, out=None, thread
     slit's own, the same runs to rounding). Returns the dict of `implicit slit --json`
     (error_x_mean, error_u_mean in %, ...).
     """
-    return _json(_implicit._run_slit(int(samples), int(runs), mode, str(estimator), seed, out,
-                                     threads))
+    return _json(_implicit._run_slit(_count(samples, "samples", 1), _count(runs, "runs", 1), mode,
+                                     str(estimator), seed, out, threads))
 
 
 def arm(seed=1, out=None, threads=0, estimator="generic"):
@@ -76,4 +78,5 @@ def arm(seed=1, out=None, threads=0, estimator="generic"):
 
 def himmelblau(runs=70, samples=50, seed=1, out=None, threads=0):
     """The Himmelblau control problem (Table 4); the dict of `implicit himmelblau --json`."""
-    return _json(_implicit._run_himmelblau(int(runs), int(samples), seed, out, threads))
+    return _json(_implicit._run_himmelblau(_count(runs, "runs", 1), _count(samples, "samples", 1),
+                                           seed, out, threads))

@@ -25,12 +25,15 @@ __all__ = ["Filter", "grid", "run"]
 
 def run(method="implicit", particles=100, datasets=50, seed=1, data=None, association="known",
         truth="paper", laser_every=1, control_noise=0.5, min_range=0.0, range_sd=0.0,
-        bearing_sd=0.0, gate_chi2=0.0, new_landmark_density=0.0, model=None, control_sd=None,
-        state_sd=None, out=None, threads=0):
+        bearing_sd_deg=0.0, gate_chi2=0.0, new_landmark_density=0.0, model=None, control_sd=None,
+        state_sd=None, out=None, threads=0, verbose=False, bearing_sd=None):
     """Runs `implicit slam` with these settings and returns its JSON result as a dict.
 
     Each argument is the CLI flag of the same name (docs/cli.md); data None means the synthetic
-    Car Park data sets, else a robot log; bearing_sd in degrees; out a folder for CSV files.
+    Car Park data sets, else a robot log; range_sd [m] and bearing_sd_deg [deg] (--range-sd,
+    --bearing-sd; bearing_sd, the same in degrees, is deprecated); out a folder for CSV files.
+    verbose: True draws the tool's progress bar (steps done, ETA) on stderr, as `implicit slam`
+    without --json does; the result is the same either way.
 
     Returns:
         dict with the keys of `implicit slam --json` (error_percent_mean, map_shape_m,
@@ -39,7 +42,7 @@ def run(method="implicit", particles=100, datasets=50, seed=1, data=None, associ
     Raises:
         implicit.InvalidArgument (a ValueError) naming the keyword, for a value the CLI refuses:
         each number is checked against the range of its flag (`particles` in [1, 10^6],
-        `bearing_sd` in [0, 90], `threads` in [0, 1024], ...; `implicit slam --help` lists
+        `bearing_sd_deg` in [0, 90], `threads` in [0, 1024], ...; `implicit slam --help` lists
         them), a wrong type likewise; the text settings (method, association, ...) with the
         CLI's own message.
     """
@@ -47,9 +50,11 @@ def run(method="implicit", particles=100, datasets=50, seed=1, data=None, associ
         method=method, particles=particles, datasets=datasets, data=data,
         association=association, truth=truth, laser_every=laser_every,
         control_noise=control_noise, min_range=min_range, range_sd=range_sd,
-        bearing_sd=bearing_sd, gate_chi2=gate_chi2, new_landmark_density=new_landmark_density,
+        bearing_sd_deg=_runs.bearing_sd_deg(bearing_sd_deg, bearing_sd, "slam.run"),
+        gate_chi2=gate_chi2, new_landmark_density=new_landmark_density,
         model=model, control_sd=control_sd, state_sd=state_sd)
-    return _runs.call(_implicit._run_slam, settings, seed, out, threads)
+    return _runs.call(_implicit._run_slam, settings, seed, out, threads, verbose,
+                      given_as=None if bearing_sd is None else {"bearing_sd_deg": "bearing_sd"})
 
 
 def grid(data, method="implicit", particles=30, seed=1, alphas=(0.002,) * 4, max_scans=0,

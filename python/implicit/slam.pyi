@@ -26,10 +26,11 @@ class Filter:
 def run(method: str = "implicit", particles: int = 100, datasets: int = 50, seed: int = 1,
         data: Optional[str] = None, association: str = "known", truth: str = "paper",
         laser_every: int = 1, control_noise: float = 0.5, min_range: float = 0.0,
-        range_sd: float = 0.0, bearing_sd: float = 0.0, gate_chi2: float = 0.0,
+        range_sd: float = 0.0, bearing_sd_deg: float = 0.0, gate_chi2: float = 0.0,
         new_landmark_density: float = 0.0, model: Optional[str] = None,
         control_sd: Optional[list[float]] = None, state_sd: Optional[list[float]] = None,
-        out: Optional[str] = None, threads: int = 0) -> dict[str, Any]: ...
+        out: Optional[str] = None, threads: int = 0, verbose: bool = False,
+        bearing_sd: Optional[float] = None) -> dict[str, Any]: ...
 
 def grid(data: Union[str, "PathLike[str]", dict[str, Any]], method: str = "implicit",
          particles: int = 30, seed: int = 1,

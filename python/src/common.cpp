@@ -131,6 +131,29 @@ std::uint64_t seed_arg(const py::handle& o, const std::string& name) {
   return i.cast<std::uint64_t>();
 }
 
+std::size_t particle_count_arg(const py::handle& o, const std::string& name, long long hi,
+                               double bytes_each) {
+  if (const py::object i = arg_as_int(o)) {
+    long long v = 0;
+    bool fits = true;
+    try {
+      v = i.cast<long long>();
+    } catch (const py::cast_error&) {  // beyond 64 bits: int_arg's message
+      fits = false;
+    }
+    if (fits && v > hi) {
+      const double bytes = static_cast<double>(v) * bytes_each;
+      const bool gib = bytes >= double(1 << 30);
+      throw InvalidArgument(fmt::format(
+          "{}: expected an integer in [1, {}], got {}: {} particles would take at least {:.3g} "
+          "{} ({} bytes each)",
+          name, hi, v, v, bytes / (gib ? double(1 << 30) : double(1 << 20)), gib ? "GiB" : "MiB",
+          bytes_each));
+    }
+  }
+  return static_cast<std::size_t>(int_arg(o, name, 1, hi));
+}
+
 bool bool_arg(const py::handle& o, const std::string& name) {
   require(py::isinstance<py::bool_>(o), "{}: expected True or False, got {}", name, type_name(o));
   return o.cast<bool>();

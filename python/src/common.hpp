@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <initializer_list>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -53,6 +54,9 @@ std::string shape_text(const py::array& a);
 /// The name of a Python object's type, for messages ("got str").
 std::string type_name(const py::handle& o);
 
+/// No bound, for number_arg (lo = -kUnbounded, hi = kUnbounded).
+inline constexpr double kUnbounded = std::numeric_limits<double>::infinity();
+
 /// A Python number as a double in [lo, hi] (lo excluded when lo_open); NaN and infinities are
 /// refused. The message names `name` and the bounds.
 double number_arg(const py::handle& o, const std::string& name, double lo, double hi,
@@ -61,6 +65,20 @@ double number_arg(const py::handle& o, const std::string& name, double lo, doubl
 long long int_arg(const py::handle& o, const std::string& name, long long lo, long long hi);
 /// A seed: an integer in [0, 2^64 - 1], the range of the tool's --seed.
 std::uint64_t seed_arg(const py::handle& o, const std::string& name);
+
+/// The most particles the tool takes (--particles of `implicit mcl`, with or without
+/// --sensor laser): the one-call runners, implicit.ssm and the filters stepped from Python refuse
+/// more, as the tool does (tests/test_runs_bad_input.py compares it with `implicit mcl --help`).
+inline constexpr long long kMaxParticles = 10'000'000;
+/// The most of `implicit slam --particles`, which carry a map each.
+inline constexpr long long kMaxSlamParticles = 1'000'000;
+/// Bytes per particle of a pose filter: the pose and its copy for resampling, the weight and
+/// the log weight (ParticleEngine); what a count costs at least.
+inline constexpr double kPoseParticleBytes = (2 * 3 + 2) * sizeof(double);
+/// A particle count, an integer in [1, hi]; a larger one is refused with the memory it would
+/// take at `bytes_each` bytes per particle (a lower bound: the state and its weights).
+std::size_t particle_count_arg(const py::handle& o, const std::string& name, long long hi,
+                               double bytes_each);
 /// True or False (not any object with a truth value).
 bool bool_arg(const py::handle& o, const std::string& name);
 /// A str that is one of `allowed`.

@@ -3,12 +3,17 @@
 
 #include <pybind11/stl.h>
 
+#include <limits>
+
 #include "common.hpp"
 #include "implicit/control/double_slit.hpp"
 #include "implicit/control/himmelblau.hpp"
 
 namespace implicit::python {
 namespace {
+
+constexpr long long kIntMin = std::numeric_limits<int>::min();
+constexpr long long kIntMax = std::numeric_limits<int>::max();
 
 control::SlitEstimator parse_estimator(const std::string& name) {
   if (name == "paper") return control::SlitEstimator::kPaper;
@@ -50,10 +55,20 @@ Example: ``implicit.control.DoubleSlit().estimate_control(1.0, 0, 50)["u"]``)doc
       .def("exact_log_psi", &control::DoubleSlit::exact_log_psi, py::arg("x"), py::arg("t"))
       .def(
           "estimate_control",
-          [](const control::DoubleSlit& s, double x, int k, int samples,
-             const std::string& estimator, std::uint64_t seed, std::uint64_t step) {
-            const auto e = s.estimate_control(x, k, samples, parse_estimator(estimator),
-                                              StreamKey{seed, step, 0, 0});
+          [](const control::DoubleSlit& s, const py::object& x, const py::object& k,
+             const py::object& samples, const py::object& estimator, const py::object& seed,
+             const py::object& step) {
+            // The grid step and the sample count are checked by the estimator (its ranges
+            // depend on the problem); here only that they are integers, never truncated.
+            const double xv = number_arg(x, "x", -kUnbounded, kUnbounded);
+            const auto kv = static_cast<int>(int_arg(k, "k", kIntMin, kIntMax));
+            const auto m = static_cast<int>(int_arg(samples, "samples", kIntMin, kIntMax));
+            require(py::isinstance<py::str>(estimator), "estimator: expected a str, got {}",
+                    type_name(estimator));
+            const auto name = estimator.cast<std::string>();
+            const auto e =
+                s.estimate_control(xv, kv, m, parse_estimator(name),
+                                   StreamKey{seed_arg(seed, "seed"), seed_arg(step, "step"), 0, 0});
             py::dict d;
             d["u"] = e.u;
             d["log_psi"] = e.log_psi;
@@ -70,14 +85,20 @@ Example: ``implicit.control.DoubleSlit().estimate_control(1.0, 0, 50)["u"]``)doc
 void bind_himmelblau(py::module_& m) {
   m.def(
       "himmelblau_control",
-      [](const py::object& x_in, int k, int samples, std::uint64_t seed, std::uint64_t step,
-         double control_cost, double sigma, double dt, double final_time) {
+      [](const py::object& x_in, const py::object& k_in, const py::object& samples_in,
+         const py::object& seed_in, const py::object& step_in, double control_cost, double sigma,
+         double dt, double final_time) {
         control::HimmelblauProblem pb;
         pb.control_cost = control_cost;
         pb.sigma = sigma;
         pb.dt = dt;
         pb.final_time = final_time;
         pb.validate();
+        // Integers, never truncated; their ranges are the problem's (himmelblau_control).
+        const auto k = static_cast<int>(int_arg(k_in, "k", kIntMin, kIntMax));
+        const auto samples = static_cast<int>(int_arg(samples_in, "samples", kIntMin, kIntMax));
+        const std::uint64_t seed = seed_arg(seed_in, "seed");
+        const std::uint64_t step = seed_arg(step_in, "step");
         const Array xa = require_shape(x_in, "x", {2});
         const Vec<2> x(xa.data()[0], xa.data()[1]);
         const auto e = control::himmelblau_control(pb, x, k, samples, x, {seed, step, 0, 0});

@@ -266,19 +266,26 @@ void init_data(py::module_& m) {
       "--model` does: another one raises ValueError.");
   m.def(
       "simulate",
-      [](const py::object& model, const robot::RangeBearingSensor& sensor, int steps, int landmarks,
-         int scan_every, double max_range, const py::object& speed, std::uint64_t seed) {
+      [](const py::object& model, const py::object& sensor_in, const py::object& steps,
+         const py::object& landmarks, const py::object& scan_every, const py::object& max_range,
+         const py::object& speed, const py::object& seed_in) {
         require_model(model, "simulate");
+        require(py::isinstance<robot::RangeBearingSensor>(sensor_in),
+                "sensor: expected implicit.models.RangeBearing, got {}", type_name(sensor_in));
+        const auto& sensor = sensor_in.cast<const robot::RangeBearingSensor&>();
+        // The ranges of `implicit simulate`'s flags (apps/cmd_simulate.cpp).
         robot::SimulationOptions o;
-        o.steps = steps;
-        o.landmarks = landmarks;
-        o.scan_every = scan_every;
-        o.max_range = max_range;
-        if (py::isinstance<robot::UnicycleModel>(model))
-          return simulate_with(model.cast<const robot::UnicycleModel&>(), sensor, o,
-                               speed.is_none() ? 1.0 : speed.cast<double>(), true, seed);
-        return simulate_with(model.cast<const robot::UteModel&>(), sensor, o,
-                             speed.is_none() ? 3.0 : speed.cast<double>(), false, seed);
+        o.steps = static_cast<int>(int_arg(steps, "steps", 1, 10'000'000));
+        o.landmarks = static_cast<int>(int_arg(landmarks, "landmarks", 1, 100'000));
+        o.scan_every = static_cast<int>(int_arg(scan_every, "scan_every", 1, 100'000));
+        o.max_range = number_arg(max_range, "max_range", 0.0, kUnbounded, /*lo_open=*/true);
+        const std::uint64_t seed = seed_arg(seed_in, "seed");
+        const bool unicycle = py::isinstance<robot::UnicycleModel>(model);
+        const double v = speed.is_none() ? (unicycle ? 1.0 : 3.0)
+                                         : number_arg(speed, "speed", 0.0, kUnbounded, true);
+        if (unicycle)
+          return simulate_with(model.cast<const robot::UnicycleModel&>(), sensor, o, v, true, seed);
+        return simulate_with(model.cast<const robot::UteModel&>(), sensor, o, v, false, seed);
       },
       py::arg("model"), py::arg("sensor"), py::arg("steps") = 1200, py::arg("landmarks") = 40,
       py::arg("scan_every") = 3, py::arg("max_range") = 15.0, py::arg("speed") = py::none(),

@@ -79,6 +79,12 @@ struct PyFilter {
   bool initialized = false;
 };
 
+/// Before initialize() the particles are zeros and the summary is empty: reading them would be
+/// a silent wrong answer.
+void require_initialized(const PyFilter& p, const char* what) {
+  require(p.initialized, "ParticleFilter.{}: call initialize(mean, covariance) first", what);
+}
+
 py::dict summary(const StepSummary& s) {
   py::dict d;
   d["step"] = s.step;
@@ -113,6 +119,23 @@ void read_detections(const py::object& detections, std::vector<LabelledMeasureme
     z.push_back({Measurement(a.at(k, 1), a.at(k, 2)), static_cast<int>(id)});
   }
 }
+
+/// A str argument whose value the library checks (with its own message): the type is checked
+/// here, so that a number is refused naming the argument rather than with pybind11's TypeError.
+std::string text_arg(const py::handle& o, const char* name) {
+  require(py::isinstance<py::str>(o), "{}: expected a str, got {}", name, type_name(o));
+  return o.cast<std::string>();
+}
+
+const robot::RangeBearingSensor& sensor_arg(const py::handle& o) {
+  require(py::isinstance<robot::RangeBearingSensor>(o),
+          "sensor: expected implicit.models.RangeBearing, got {}", type_name(o));
+  return o.cast<const robot::RangeBearingSensor&>();
+}
+
+/// dt of step(), a number (0 keeps the previous step length); a negative one is refused by the
+/// filter itself, with its message.
+double step_length_arg(const py::handle& o) { return number_arg(o, "dt", -kUnbounded, kUnbounded); }
 
 /// The map of a ParticleFilter: positions (K, 2) and, when given, their ids (K,) (else 0..K-1,
 /// the rows).
@@ -207,37 +230,43 @@ Example::
 
 void bind_particle_filter(py::module_& m) {
   py::class_<PyFilter>(m, "ParticleFilter", kParticleFilterDoc)
-      .def(py::init([](const py::object& model, const robot::RangeBearingSensor& sensor,
-                       const py::object& landmarks, const std::string& proposal,
-                       std::size_t particles, std::uint64_t seed, const std::string& map,
-                       double resample_threshold, const std::string& resampling, bool clutter,
-                       const py::object& landmark_ids) {
-             filter::FilterOptions o;
-             o.particles = particles;
-             o.seed = seed;
-             o.resample_threshold = resample_threshold;
-             o.resampling = parse_resampling_scheme(resampling);
-             o.association.clutter = clutter;
-             robot::LandmarkMap lm = filter_landmark_map(landmarks, landmark_ids);
-             PyFilter p;
-             p.map = lm;
-             if (py::isinstance<robot::UnicycleModel>(model))
-               p.f = make_filter(model.cast<const robot::UnicycleModel&>(), sensor, std::move(lm),
-                                 proposal, map, o);
-             else if (py::isinstance<robot::UteModel>(model))
-               p.f = make_filter(model.cast<const robot::UteModel&>(), sensor, std::move(lm),
-                                 proposal, map, o);
-             else
-               throw InvalidArgument(fmt::format(
-                   "ParticleFilter: model: expected implicit.models.Ute or Unicycle, got {}",
-                   std::string(py::str(py::type::handle_of(model).attr("__name__")))));
-             return p;
-           }),
-           py::arg("model"), py::arg("sensor"), py::arg("landmarks"),
-           py::arg("proposal") = "implicit", py::arg("particles") = 100, py::arg("seed") = 1,
-           py::arg("map") = "linear", py::arg("resample_threshold") = 0.5,
-           py::arg("resampling") = "systematic", py::arg("clutter") = true,
-           py::arg("landmark_ids") = py::none())
+      .def(
+          py::init([](const py::object& model, const py::object& sensor_in,
+                      const py::object& landmarks, const py::object& proposal_in,
+                      const py::object& particles, const py::object& seed, const py::object& map_in,
+                      const py::object& resample_threshold, const py::object& resampling,
+                      const py::object& clutter, const py::object& landmark_ids) {
+            const robot::RangeBearingSensor& sensor = sensor_arg(sensor_in);
+            const std::string proposal = text_arg(proposal_in, "proposal");
+            const std::string map = text_arg(map_in, "map");
+            filter::FilterOptions o;
+            o.particles =
+                particle_count_arg(particles, "particles", kMaxParticles, kPoseParticleBytes);
+            o.seed = seed_arg(seed, "seed");
+            o.resample_threshold = number_arg(resample_threshold, "resample_threshold", 0.0, 1.0);
+            o.resampling = parse_resampling_scheme(choice_arg(
+                resampling, "resampling", {"multinomial", "systematic", "stratified", "residual"}));
+            o.association.clutter = bool_arg(clutter, "clutter");
+            robot::LandmarkMap lm = filter_landmark_map(landmarks, landmark_ids);
+            PyFilter p;
+            p.map = lm;
+            if (py::isinstance<robot::UnicycleModel>(model))
+              p.f = make_filter(model.cast<const robot::UnicycleModel&>(), sensor, std::move(lm),
+                                proposal, map, o);
+            else if (py::isinstance<robot::UteModel>(model))
+              p.f = make_filter(model.cast<const robot::UteModel&>(), sensor, std::move(lm),
+                                proposal, map, o);
+            else
+              throw InvalidArgument(fmt::format(
+                  "ParticleFilter: model: expected implicit.models.Ute or Unicycle, got {}",
+                  std::string(py::str(py::type::handle_of(model).attr("__name__")))));
+            return p;
+          }),
+          py::arg("model"), py::arg("sensor"), py::arg("landmarks"),
+          py::arg("proposal") = "implicit", py::arg("particles") = 100, py::arg("seed") = 1,
+          py::arg("map") = "linear", py::arg("resample_threshold") = 0.5,
+          py::arg("resampling") = "systematic", py::arg("clutter") = true,
+          py::arg("landmark_ids") = py::none())
       .def(
           "initialize",
           [](PyFilter& p, const py::object& mean, const py::object& cov) {
@@ -253,8 +282,10 @@ void bind_particle_filter(py::module_& m) {
           "Draws the particles from N(mean (3,), covariance (3, 3)) with equal weights.")
       .def(
           "step",
-          [](PyFilter& p, const py::object& control, double dt, const py::object& detections) {
-            require(p.initialized, "ParticleFilter.step: call initialize(mean, covariance) first");
+          [](PyFilter& p, const py::object& control, const py::object& dt_in,
+             const py::object& detections) {
+            require_initialized(p, "step");
+            const double dt = step_length_arg(dt_in);
             const Array u = require_shape(control, "control", {2});
             read_detections(detections, p.z);
             ids_to_map_indices(p.map, p.z);
@@ -271,7 +302,9 @@ void bind_particle_filter(py::module_& m) {
           "predict); the ids are those of the map (landmark_ids, else the rows of landmarks).")
       .def_property_readonly("particles",
                              [](py::object self) {
-                               const auto s = self.cast<PyFilter&>().f->particles();
+                               const PyFilter& p = self.cast<const PyFilter&>();
+                               require_initialized(p, "particles");
+                               const auto s = p.f->particles();
                                py::array_t<double> a(
                                    {static_cast<py::ssize_t>(s.size()), py::ssize_t{3}},
                                    s.data()->data(), self);
@@ -280,20 +313,33 @@ void bind_particle_filter(py::module_& m) {
                              })
       .def_property_readonly("weights",
                              [](py::object self) {
-                               const auto w = self.cast<PyFilter&>().f->weights();
+                               const PyFilter& p = self.cast<const PyFilter&>();
+                               require_initialized(p, "weights");
+                               const auto w = p.f->weights();
                                py::array_t<double> a(static_cast<py::ssize_t>(w.size()), w.data(),
                                                      self);
                                a.attr("flags").attr("writeable") = false;
                                return a;
                              })
       .def("mean",
-           [](const PyFilter& p) { return py::array_t<double>(3, p.f->last().mean.data()); })
+           [](const PyFilter& p) {
+             require_initialized(p, "mean");
+             return py::array_t<double>(3, p.f->last().mean.data());
+           })
       .def("covariance",
            [](const PyFilter& p) {
+             require_initialized(p, "covariance");
              return py::array_t<double>({3, 3}, p.f->last().covariance.data());
            })
-      .def_property_readonly("ess", [](const PyFilter& p) { return p.f->last().ess; })
-      .def_property_readonly("last", [](const PyFilter& p) { return summary(p.f->last()); });
+      .def_property_readonly("ess",
+                             [](const PyFilter& p) {
+                               require_initialized(p, "ess");
+                               return p.f->last().ess;
+                             })
+      .def_property_readonly("last", [](const PyFilter& p) {
+        require_initialized(p, "last");
+        return summary(p.f->last());
+      });
 }
 
 struct PySlam {
@@ -325,19 +371,27 @@ ESS / M over the weighted steps so far.)doc";
 
 void bind_slam_filter(py::module_& m) {
   py::class_<PySlam>(m, "Filter", kSlamFilterDoc)
-      .def(py::init([](const std::string& method, int particles, std::uint64_t seed,
-                       const py::object& model, const robot::RangeBearingSensor& sensor,
-                       const std::string& association, const py::object& initial_pose) {
+      .def(py::init([](const py::object& method, const py::object& particles,
+                       const py::object& seed, const py::object& model, const py::object& sensor,
+                       const py::object& association, const py::object& initial_pose) {
              slam::SlamOptions o;
-             o.method = slam::parse_slam_method(method);
-             o.association = slam::parse_association(association);
-             o.particles = particles;
-             o.seed = seed;
-             o.sensor = sensor;
+             o.method = slam::parse_slam_method(text_arg(method, "method"));
+             o.association = slam::parse_association(text_arg(association, "association"));
+             // The tool's cap (`implicit slam --particles`); the pose is what a particle costs
+             // at least, its map grows with the landmarks.
+             o.particles = static_cast<int>(
+                 particle_count_arg(particles, "particles", kMaxSlamParticles, kPoseParticleBytes));
+             o.seed = seed_arg(seed, "seed");
+             o.sensor = sensor_arg(sensor);
              if (py::isinstance<robot::UnicycleModel>(model))
                o.model = robot::AnyMotionModel(model.cast<const robot::UnicycleModel&>());
-             else if (!model.is_none())
+             else if (py::isinstance<robot::UteModel>(model))
                o.motion = model.cast<const robot::UteModel&>().params();
+             else
+               require(model.is_none(),
+                       "model: expected implicit.models.Ute, implicit.models.Unicycle or None, "
+                       "got {}",
+                       type_name(model));
              o.validate();
              const Array x0 = require_shape(initial_pose, "initial_pose", {3});
              PySlam p;
@@ -350,7 +404,9 @@ void bind_slam_filter(py::module_& m) {
            py::arg("initial_pose") = py::array_t<double>(3, Pose::Zero().eval().data()))
       .def(
           "step",
-          [](PySlam& p, const py::object& control, double dt, const py::object& detections) {
+          [](PySlam& p, const py::object& control, const py::object& dt_in,
+             const py::object& detections) {
+            const double dt = step_length_arg(dt_in);
             const Array u = require_shape(control, "control", {2});
             std::vector<LabelledMeasurement> z;
             read_detections(detections, z);

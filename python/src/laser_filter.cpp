@@ -114,7 +114,8 @@ PyLaserFilter make_filter(const py::object& grid, const py::object& proposal,
   const robot::OccupancyGrid& g = grid_arg(grid, "grid");
   const bool implicit = choice_arg(proposal, "proposal", {"implicit", "bootstrap"}) == "implicit";
   filter::FilterOptions o;
-  o.particles = static_cast<std::size_t>(int_arg(particles, "particles", 1, 10'000'000));
+  o.particles = static_cast<std::size_t>(
+      particle_count_arg(particles, "particles", kMaxParticles, kPoseParticleBytes));
   o.seed = static_cast<std::uint64_t>(int_arg(seed, "seed", 0, kMaxInt));
   o.resample_threshold = number_arg(resample_threshold, "resample_threshold", 0.0, 1.0);
   const robot::OdometryModel motion(alphas_arg(alphas, "alphas"));
@@ -367,7 +368,8 @@ std::string run(const py::dict& kw, const py::object& progress) {
                        ? filter::ImplicitMap::kLinear
                        : filter::ImplicitMap::kRandom;
   s.implicit_starts = static_cast<int>(int_arg(arg("starts"), "starts", 1, 64));
-  s.particles = static_cast<std::size_t>(int_arg(arg("particles"), "particles", 1, 10'000'000));
+  s.particles = static_cast<std::size_t>(
+      particle_count_arg(arg("particles"), "particles", kMaxParticles, kPoseParticleBytes));
   s.runs = static_cast<int>(int_arg(arg("runs"), "runs", 1, 100000));
   s.seed = static_cast<std::uint64_t>(int_arg(arg("seed"), "seed", 0, kMaxInt));
   // None keeps the experiment's defaults, so that a run without them is the tool's without them.

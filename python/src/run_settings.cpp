@@ -19,16 +19,16 @@ constexpr RunSettingRange kRunThreadsRange{"threads", "--threads", 0, 1024, true
 
 // The ranges of apps/cmd_mcl.cpp (setup_mcl and add_global_options), keyword by keyword.
 constexpr RunSettingRange kMclRanges[] = {
-    {"particles", "--particles", 1, 10'000'000, true},
+    {"particles", "--particles", 1, kMaxParticles, true},
     {"runs", "--runs", 1, 100'000, true},
     {"p", "--p", 0.0, 10.0, false},
     {"q", "--q", 1e-6, 10.0, false},
     {"gps_std", "--gps-std", 1e-3, 100.0, false},
-    {"reference_particles", "--reference-particles", 1, 10'000'000, true},
+    {"reference_particles", "--reference-particles", 1, kMaxParticles, true},
     {"control_sd", "--control-sd", 0.0, 100.0, false, 2},
     {"state_sd", "--state-sd", 1e-9, 100.0, false, 3},
     {"range_sd", "--range-sd", 0.0, 100.0, false},
-    {"bearing_sd", "--bearing-sd", 0.0, 90.0, false},
+    {"bearing_sd_deg", "--bearing-sd", 0.0, 90.0, false},  // degrees, as the flag
     {"label_gate", "--label-gate", 0.0, 1e6, false},
     {"start_span", "--start-span", 0.0, 1e6, false},
     {"duration", "--duration", 0.0, 1e6, false},
@@ -39,8 +39,8 @@ constexpr RunSettingRange kMclRanges[] = {
     {"kidnap_probability", "--kidnap-probability", 1e-300, 0.5, false},
     {"kld_err", "--kld-err", 1e-6, 1.0, false},
     {"kld_z", "--kld-z", 0.0, 10.0, false},
-    {"min_particles", "--min-particles", 1, 10'000'000, true},
-    {"max_particles", "--max-particles", 1, 10'000'000, true},
+    {"min_particles", "--min-particles", 1, kMaxParticles, true},
+    {"max_particles", "--max-particles", 1, kMaxParticles, true},
     {"cover_spacing", "--cover-spacing", 0.05, 100.0, false},
     {"cover_headings", "--cover-headings", 1, 360, true},
     kRunThreadsRange,
@@ -48,13 +48,13 @@ constexpr RunSettingRange kMclRanges[] = {
 
 // The ranges of apps/cmd_slam.cpp (setup_slam).
 constexpr RunSettingRange kSlamRanges[] = {
-    {"particles", "--particles", 1, 1'000'000, true},
+    {"particles", "--particles", 1, kMaxSlamParticles, true},
     {"datasets", "--datasets", 1, 100'000, true},
     {"laser_every", "--laser-every", 1, 10'000, true},
     {"control_noise", "--control-noise", 1e-6, 10.0, false},
     {"min_range", "--min-range", 0.0, 100.0, false},
     {"range_sd", "--range-sd", 0.0, 100.0, false},
-    {"bearing_sd", "--bearing-sd", 0.0, 90.0, false},
+    {"bearing_sd_deg", "--bearing-sd", 0.0, 90.0, false},
     {"gate_chi2", "--gate-chi2", 0.0, 1e6, false},
     {"new_landmark_density", "--new-landmark-density", 0.0, 1e6, false},
     {"control_sd", "--control-sd", 0.0, 100.0, false, 2},
@@ -73,6 +73,11 @@ class RunKeywords {
       : kw_(kw), ranges_(ranges) {}
 
   int integer(const char* key) const { return static_cast<int>(run_int_arg(get(key), range(key))); }
+  /// A particle count: beyond the flag's range the message says how much memory it would take.
+  int particles(const char* key) const {
+    const auto hi = static_cast<long long>(range(key).hi);
+    return static_cast<int>(particle_count_arg(get(key), key, hi, kPoseParticleBytes));
+  }
   double number(const char* key) const {
     const RunSettingRange& r = range(key);
     return number_arg(get(key), key, r.lo, r.hi);
@@ -141,7 +146,7 @@ experiments::MclSettings mcl_settings(const py::dict& kw) {
   const RunKeywords k(kw, kMclRanges);
   experiments::MclSettings s;
   s.method = k.text("method");
-  s.particles = k.integer("particles");
+  s.particles = k.particles("particles");
   s.runs = k.integer("runs");
   s.data_dir = k.path("data");
   s.config = experiments::parse_noise_config(k.text("config"));
@@ -153,12 +158,12 @@ experiments::MclSettings mcl_settings(const py::dict& kw) {
   s.sigma2 = experiments::parse_sigma2(k.text("sigma2"));
   s.truth = experiments::parse_mcl_truth(k.text("truth"));
   s.gps_std = k.number("gps_std");
-  s.reference_particles = k.integer("reference_particles");
+  s.reference_particles = k.particles("reference_particles");
   s.model = k.text_or_empty("model");
   s.control_sd = k.numbers("control_sd");
   s.state_sd = k.numbers("state_sd");
   s.range_sd = k.number("range_sd");
-  s.bearing_sd_deg = k.number("bearing_sd");
+  s.bearing_sd_deg = k.number("bearing_sd_deg");
   s.init = k.text("init");
   s.start_span = k.number("start_span");
   s.duration = k.number("duration");
@@ -171,8 +176,8 @@ experiments::MclSettings mcl_settings(const py::dict& kw) {
   s.kld = k.flag("kld");
   s.kld_err = k.number("kld_err");
   s.kld_z = k.number("kld_z");
-  s.min_particles = k.integer("min_particles");
-  s.max_particles = k.integer("max_particles");
+  s.min_particles = k.particles("min_particles");
+  s.max_particles = k.particles("max_particles");
   s.cover_spacing = k.number("cover_spacing");
   s.cover_headings = k.integer("cover_headings");
   return s;
@@ -182,7 +187,7 @@ experiments::SlamSettings slam_settings(const py::dict& kw) {
   const RunKeywords k(kw, kSlamRanges);
   experiments::SlamSettings s;
   s.method = k.text("method");
-  s.particles = k.integer("particles");
+  s.particles = k.particles("particles");
   s.datasets = k.integer("datasets");
   s.data_dir = k.path("data");
   s.association = k.text("association");
@@ -191,7 +196,7 @@ experiments::SlamSettings slam_settings(const py::dict& kw) {
   s.control_noise = k.number("control_noise");
   s.min_range = k.number("min_range");
   s.range_sd = k.number("range_sd");
-  s.bearing_sd_deg = k.number("bearing_sd");
+  s.bearing_sd_deg = k.number("bearing_sd_deg");
   s.gate_chi2 = k.number("gate_chi2");
   s.new_landmark_density = k.number("new_landmark_density");
   s.model = k.text_or_empty("model");
@@ -201,13 +206,13 @@ experiments::SlamSettings slam_settings(const py::dict& kw) {
 }
 
 experiments::RunContext run_context(const py::handle& seed, const py::handle& out,
-                                    const py::handle& threads) {
+                                    const py::handle& threads, const py::handle& verbose) {
   experiments::RunContext ctx;
   ctx.seed = seed_arg(seed, "seed");
   ctx.out_dir = out.is_none() ? std::string() : path_arg(out, "out").string();
   ctx.threads = static_cast<int>(run_int_arg(threads, kRunThreadsRange));
-  ctx.quiet = true;
-  ctx.json = true;
+  ctx.quiet = !bool_arg(verbose, "verbose");
+  ctx.json = ctx.quiet;
   return ctx;
 }
 

@@ -33,9 +33,11 @@ std::span<const RunSettingRange> run_setting_ranges(const std::string& command);
 experiments::MclSettings mcl_settings(const py::dict& kw);
 experiments::SlamSettings slam_settings(const py::dict& kw);
 
-/// The common settings of every runner: seed (--seed: [0, 2^64 - 1]), out (None: no files) and
-/// threads (--threads: [0, 1024]).
+/// The common settings of every runner: seed (--seed: [0, 2^64 - 1]), out (None: no files),
+/// threads (--threads: [0, 1024]) and verbose (True: the tool's progress bar on stderr, as
+/// without --json; False: nothing on stderr but warnings).
 experiments::RunContext run_context(const py::handle& seed, const py::handle& out,
-                                    const py::handle& threads);
+                                    const py::handle& threads,
+                                    const py::handle& verbose = py::bool_(false));
 
 }  // namespace implicit::python

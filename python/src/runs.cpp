@@ -36,19 +36,21 @@ void init_runs(py::module_& m) {
   m.def(
       "_run_mcl",
       [](const py::dict& kw, const py::object& seed, const py::object& out,
-         const py::object& threads) {
+         const py::object& threads, const py::object& verbose) {
         const experiments::MclSettings s = mcl_settings(kw);
-        return run_json(s, run_context(seed, out, threads), &experiments::run_mcl);
+        return run_json(s, run_context(seed, out, threads, verbose), &experiments::run_mcl);
       },
-      py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"));
+      py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"),
+      py::arg("verbose") = false);
   m.def(
       "_run_slam",
       [](const py::dict& kw, const py::object& seed, const py::object& out,
-         const py::object& threads) {
+         const py::object& threads, const py::object& verbose) {
         const experiments::SlamSettings s = slam_settings(kw);
-        return run_json(s, run_context(seed, out, threads), &experiments::run_slam);
+        return run_json(s, run_context(seed, out, threads, verbose), &experiments::run_slam);
       },
-      py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"));
+      py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"),
+      py::arg("verbose") = false);
   m.def(
       "_run_setting_ranges",
       [](const std::string& command) {

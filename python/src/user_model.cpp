@@ -235,7 +235,10 @@ py::dict user_model_filter(const py::dict& a) {
           proposal);
   require(s.proposal != Proposal::kGuided || !cb.proposal.is_none(),
           "proposal: 'guided' draws from the model's proposal, expected a callable, got None");
-  s.particles = static_cast<std::size_t>(int_arg(a["particles"], "particles", 1, 10000000));
+  // A particle costs its state twice (population and resampling copy), its normals, the
+  // weight and the log weight.
+  s.particles = particle_count_arg(a["particles"], "particles", kMaxParticles,
+                                   static_cast<double>(3 * cb.dim + 2) * sizeof(double));
   s.scheme = parse_resampling_scheme(choice_arg(
       a["resampling"], "resampling", {"multinomial", "systematic", "stratified", "residual"}));
   s.random_map = choice_arg(a["map"], "map", {"linear", "random"}) == "random";

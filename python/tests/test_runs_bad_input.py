@@ -32,8 +32,10 @@ BAD_RUNS = [
     (mcl(p="0.5"), r"^p: expected a number in \[0, 10\], got str"),
     (mcl(q=0.0), r"^q: expected a number in \[1e-06, 10\], got 0"),
     (mcl(range_sd=-1.0), r"^range_sd: expected a number in \[0, 100\], got -1"),
-    (mcl(bearing_sd=math.inf), r"^bearing_sd: expected a number in \[0, 90\], got inf"),
-    (mcl(bearing_sd=-2.0), r"^bearing_sd: expected a number in \[0, 90\], got -2"),
+    (mcl(bearing_sd_deg=math.inf), r"^bearing_sd_deg: expected a number in \[0, 90\], got inf"),
+    (mcl(bearing_sd_deg=-2.0), r"^bearing_sd_deg: expected a number in \[0, 90\], got -2"),
+    (mcl(bearing_sd_deg=1.0, bearing_sd=2.0),
+     r"^bearing_sd_deg: pass it or the deprecated bearing_sd, not both \(got 1\.0 and 2\.0\)"),
     (mcl(label_gate=-1.0), r"^label_gate: expected a number in \[0, 1000000\], got -1"),
     (mcl(label_gate=math.nan), r"^label_gate: expected a number in \[0, 1000000\], got nan"),
     (mcl(label_gate="9"), r"^label_gate: expected a number in \[0, 1000000\], got str"),
@@ -89,7 +91,7 @@ BAD_RUNS = [
     (slam(control_noise=math.nan), r"^control_noise: expected a number in \[1e-06, 10\], got nan"),
     (slam(min_range=-1.0), r"^min_range: expected a number in \[0, 100\], got -1"),
     (slam(range_sd=-0.5), r"^range_sd: expected a number in \[0, 100\], got -0\.5"),
-    (slam(bearing_sd=-1.0), r"^bearing_sd: expected a number in \[0, 90\], got -1"),
+    (slam(bearing_sd_deg=-1.0), r"^bearing_sd_deg: expected a number in \[0, 90\], got -1"),
     (slam(gate_chi2=-1.0), r"^gate_chi2: expected a number in \[0, 1000000\], got -1"),
     (slam(new_landmark_density=math.inf), r"^new_landmark_density: expected a number in "
      r"\[0, 1000000\], got inf"),
@@ -109,9 +111,170 @@ BAD_RUNS = [
 
 
 @pytest.mark.parametrize("call,message", BAD_RUNS, ids=[f"row{k}" for k in range(len(BAD_RUNS))])
+@pytest.mark.filterwarnings("ignore:.*bearing_sd is deprecated:DeprecationWarning")
 def test_bad_run_settings_are_named(call, message):
     with pytest.raises(implicit.InvalidArgument, match=message):
         call()
+
+
+UTE, SENSOR = implicit.models.Ute(), implicit.models.RangeBearing()
+
+
+def particle_filter(**changes):
+    return lambda: implicit.ParticleFilter(UTE, SENSOR, np.zeros((2, 2)),
+                                           **{"particles": 5, **changes})
+
+
+def slam_filter(**changes):
+    return lambda: implicit.slam.Filter(**{"method": "fastslam1", "particles": 5, **changes})
+
+
+def simulate(**changes):
+    return lambda: implicit.data.simulate(UTE, SENSOR, **{"steps": 30, **changes})
+
+
+def slit_control(**changes):
+    return lambda: implicit.control.estimate_control(
+        implicit.control.DoubleSlit(), **{"x": 1.0, "samples": 5, **changes})
+
+
+def himmelblau_control(**changes):
+    return lambda: implicit.control.estimate_control(
+        "himmelblau", **{"x": [-1.0, -4.0], "samples": 5, **changes})
+
+
+def before_initialize(what):
+    pf = implicit.ParticleFilter(UTE, SENSOR, np.zeros((2, 2)), particles=5)
+    return lambda: getattr(pf, what)() if what in ("mean", "covariance") else getattr(pf, what)
+
+
+def step_with_dt(make, dt):
+    def call():
+        f = make()
+        if isinstance(f, implicit.ParticleFilter):
+            f.initialize([0.0, 0.0, 0.0], np.eye(3) * 0.01)
+        f.step([1.0, 0.0], dt)
+    return call
+
+
+INT_M = r"an integer in \[1, 10000000\]"
+INT_SLAM_M = r"an integer in \[1, 1000000\]"
+SEED = r"expected an integer in \[0, 2\^64 - 1\], got "
+# The other bindings: negative or fractional integers, counts beyond the tool's cap (with the
+# memory they would take), wrong types: InvalidArgument naming the argument, never pybind11's
+# TypeError listing the signature, nor a silent truncation.
+BAD_BINDINGS = [
+    (particle_filter(particles=-1), r"^particles: expected " + INT_M + ", got -1$"),
+    (particle_filter(particles=0), r"^particles: expected " + INT_M + ", got 0$"),
+    (particle_filter(particles=2.5), r"^particles: expected " + INT_M + ", got float$"),
+    (particle_filter(particles=True), r"^particles: expected " + INT_M + ", got bool$"),
+    (particle_filter(particles=10**8), r"^particles: expected " + INT_M + r", got 100000000: "
+     r"100000000 particles would take at least 5\.96 GiB \(64 bytes each\)$"),
+    (particle_filter(seed=-1), r"^seed: " + SEED + "-1$"),
+    (particle_filter(seed=1.5), r"^seed: " + SEED + "float$"),
+    (particle_filter(proposal=3), r"^proposal: expected a str, got int$"),
+    (particle_filter(map=None), r"^map: expected a str, got NoneType$"),
+    (particle_filter(resampling="best"), r"^resampling: expected 'multinomial', 'systematic', "
+     r"'stratified' or 'residual', got 'best'$"),
+    (particle_filter(resample_threshold=math.nan),
+     r"^resample_threshold: expected a number in \[0, 1\], got nan$"),
+    (particle_filter(resample_threshold="0.5"),
+     r"^resample_threshold: expected a number in \[0, 1\], got str$"),
+    (particle_filter(clutter=1), r"^clutter: expected True or False, got int$"),
+    (lambda: implicit.ParticleFilter(UTE, 3, np.zeros((2, 2))),
+     r"^sensor: expected implicit\.models\.RangeBearing, got int$"),
+    (before_initialize("mean"), r"^ParticleFilter\.mean: call initialize\(mean, covariance\) "
+     r"first$"),
+    (before_initialize("covariance"), r"^ParticleFilter\.covariance: call initialize"),
+    (before_initialize("particles"), r"^ParticleFilter\.particles: call initialize"),
+    (before_initialize("weights"), r"^ParticleFilter\.weights: call initialize"),
+    (before_initialize("ess"), r"^ParticleFilter\.ess: call initialize"),
+    (before_initialize("last"), r"^ParticleFilter\.last: call initialize"),
+    (step_with_dt(particle_filter(), -1.0),
+     r"^particle filter: expected a positive step length, got -1$"),
+    (step_with_dt(particle_filter(), "0.1"), r"^dt: expected a finite number, got str$"),
+    (slam_filter(particles=-1), r"^particles: expected " + INT_SLAM_M + ", got -1$"),
+    (slam_filter(particles=2.5), r"^particles: expected " + INT_SLAM_M + ", got float$"),
+    (slam_filter(particles=2 * 10**6), r"^particles: expected " + INT_SLAM_M + r", got 2000000: "
+     r"2000000 particles would take at least 122 MiB \(64 bytes each\)$"),
+    (slam_filter(seed=-1), r"^seed: " + SEED + "-1$"),
+    (slam_filter(method=None), r"^method: expected a str, got NoneType$"),
+    (slam_filter(association=1), r"^association: expected a str, got int$"),
+    (slam_filter(model=3), r"^model: expected implicit\.models\.Ute, implicit\.models\.Unicycle "
+     r"or None, got int$"),
+    (slam_filter(sensor="rb"), r"^sensor: expected implicit\.models\.RangeBearing, got str$"),
+    (step_with_dt(slam_filter(), math.nan), r"^dt: expected a finite number, got nan$"),
+    (step_with_dt(slam_filter(), -0.5), r"^SLAM: expected a positive step length, got -0\.5$"),
+    (simulate(steps=-1), r"^steps: expected an integer in \[1, 10000000\], got -1$"),
+    (simulate(steps=2.5), r"^steps: expected an integer in \[1, 10000000\], got float$"),
+    (simulate(landmarks=0), r"^landmarks: expected an integer in \[1, 100000\], got 0$"),
+    (simulate(scan_every=-3), r"^scan_every: expected an integer in \[1, 100000\], got -3$"),
+    (simulate(max_range=-1.0), r"^max_range: expected a finite number > 0, got -1$"),
+    (simulate(speed=0.0), r"^speed: expected a finite number > 0, got 0$"),
+    (simulate(seed=-1), r"^seed: " + SEED + "-1$"),
+    (lambda: implicit.data.simulate(UTE, None, steps=30),
+     r"^sensor: expected implicit\.models\.RangeBearing, got NoneType$"),
+    (slit_control(samples=2.5), r"^samples: expected an integer in \[-2147483648, 2147483647\], "
+     r"got float$"),
+    (slit_control(samples=-1), r"^double slit control estimate: expected at least 1 sample, "
+     r"got -1$"),
+    (slit_control(k=1.0), r"^k: expected an integer in .* got float$"),
+    (slit_control(seed=-1), r"^seed: " + SEED + "-1$"),
+    (slit_control(step=-1), r"^step: " + SEED + "-1$"),
+    (slit_control(estimator=2), r"^estimator: expected a str, got int$"),
+    (slit_control(x=math.nan), r"^x: expected a finite number, got nan$"),
+    (himmelblau_control(samples=2.5), r"^samples: expected an integer in .* got float$"),
+    (himmelblau_control(k=-1), r"^Himmelblau control: expected a step in \[0, 20\), got -1$"),
+    (himmelblau_control(seed=2**64), r"^seed: " + SEED + "18446744073709551616$"),
+    (lambda: implicit.control.double_slit(samples=5, runs=2.5),
+     r"^runs: expected an integer, got float 2\.5$"),
+    (lambda: implicit.control.double_slit(samples=-5, runs=1),
+     r"^samples: expected an integer >= 1, got -5$"),
+    (lambda: implicit.control.himmelblau(runs=0, samples=5),
+     r"^runs: expected an integer >= 1, got 0$"),
+    (mcl(verbose=1), r"^verbose: expected True or False, got int$"),
+    (slam(verbose="yes"), r"^verbose: expected True or False, got str$"),
+    (mcl(particles=2 * 10**7), r"^particles: expected " + INT_MCL_M + r", got 20000000: "
+     r"20000000 particles would take at least 1\.19 GiB \(64 bytes each\)$"),
+    (lambda: implicit.ssm.particle_filter(
+        implicit.ssm.Model(dim=2, initial=lambda z: z, transition=lambda t, x, z: x,
+                           observation_logpdf=lambda t, x, y: x[:, 0]), [1.0], particles=10**8),
+     r"^particles: expected " + INT_M + r", got 100000000: 100000000 particles would take at "
+     r"least 5\.96 GiB \(64 bytes each\)$"),
+]
+
+
+@pytest.mark.parametrize("call,message", BAD_BINDINGS,
+                         ids=[f"row{k}" for k in range(len(BAD_BINDINGS))])
+def test_bad_binding_arguments_are_named(call, message):
+    with pytest.raises(implicit.InvalidArgument, match=message):
+        call()
+
+
+@pytest.mark.parametrize("run,size", [(implicit.mcl.run, "runs"), (implicit.slam.run, "datasets")])
+def test_deprecated_bearing_sd_is_bearing_sd_deg(run, size):
+    # The old keyword (degrees, the unit not in its name) warns and gives the same run.
+    kw = {size: 1, "particles": 5, "seed": 3, "range_sd": 0.2}
+    new = run(bearing_sd_deg=2.0, **kw)
+    with pytest.warns(DeprecationWarning, match=r"bearing_sd is deprecated .* pass bearing_sd_deg"):
+        old = run(bearing_sd=2.0, **kw)
+    assert new["error_percent_mean"] == old["error_percent_mean"]
+    assert new["error_percent_mean"] != run(**kw)["error_percent_mean"]  # the noise is used
+    with pytest.warns(DeprecationWarning), pytest.raises(implicit.InvalidArgument,
+                                                         match=r"^bearing_sd: expected a number"):
+        run(bearing_sd=-1.0, **kw)
+
+
+def test_verbose_runs_give_the_same_numbers(capfd):
+    # The progress bar is drawn by the tool's code on the process's stderr; the numbers are those
+    # of a quiet run (timing keys aside).
+    quiet = implicit.mcl.run(runs=2, particles=10, seed=4)
+    loud = implicit.mcl.run(runs=2, particles=10, seed=4, verbose=True)
+    err = capfd.readouterr().err
+    assert "mcl implicit M=10" in err
+    timing = ("ms_per_step", "seconds", "memory_mb")
+    assert ({k: v for k, v in quiet.items() if not any(t in k for t in timing)}
+            == {k: v for k, v in loud.items() if not any(t in k for t in timing)})
 
 
 def cli_exe():
@@ -147,9 +310,11 @@ def test_run_ranges_are_those_of_the_cli(command, run):
     keywords = set(inspect.signature(run).parameters)
     for r in table:
         assert r["key"] in keywords, r
-        assert r["flag"] == "--" + r["key"].replace("_", "-"), r
+        # The keyword is the flag's name, with the unit when the flag's help gives it (degrees).
+        key = r["key"].removesuffix("_deg")
+        assert r["flag"] == "--" + key.replace("_", "-"), r
         assert cli.get(r["flag"]) == (r["integer"], r["lo"], r["hi"], r["count"]), r
-    checked = {r["key"] for r in table}
+    checked = {r["key"].removesuffix("_deg") for r in table}
     for flag in cli:
         key = flag[2:].replace("-", "_")
         assert key not in keywords or key in checked, f"{command}.run({key}=...) is not checked"

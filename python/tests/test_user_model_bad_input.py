@@ -50,7 +50,8 @@ BAD = [
     (run(particles=0), r"^particles: expected an integer in \[1, 10000000\], got 0$"),
     (run(particles=2.5), r"^particles: expected an integer in \[1, 10000000\], got float$"),
     (run(particles=10_000_001),
-     r"^particles: expected an integer in \[1, 10000000\], got 10000001$"),
+     r"^particles: expected an integer in \[1, 10000000\], got 10000001: 10000001 particles "
+     r"would take at least 381 MiB \(40 bytes each\)$"),
     (run(particles=True), r"^particles: expected an integer in \[1, 10000000\], got bool$"),
     (run(proposal="optimal"),
      r"^proposal: expected 'bootstrap', 'implicit' or 'guided', got 'optimal'$"),
