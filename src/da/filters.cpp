@@ -212,14 +212,21 @@ void EnsembleFilter::forecast_and_weigh(const Eigen::VectorXd& y) {
   const Method method = options_.method;
   const bool noisy = problem_.stochastic() && method != Method::kImplicit;
   std::vector<char> failed(slots_.size(), 0);
+  // Fixed sizes for Lorenz-63 (3) and the Lorenz-96 benchmark (10): Newton and the maps then
+  // run without heap allocation per member; other sizes take the dynamic path.
   ImplicitTerms<3> t3;
+  ImplicitTerms<10> t10;
   ImplicitTerms<Eigen::Dynamic> tx;
-  const bool small = problem_.dim() == 3;
+  const int n = problem_.dim();
   if (method == Method::kImplicit) {
-    if (small)
-      t3 = implicit_terms<3>(q_inv_, g_, problem_.H, problem_.R, y, log_norm_);
+    const auto& H = problem_.H;
+    const auto& R = problem_.R;
+    if (n == 3)
+      t3 = implicit_terms<3>(q_inv_, g_, H, R, y, log_norm_);
+    else if (n == 10)
+      t10 = implicit_terms<10>(q_inv_, g_, H, R, y, log_norm_);
     else
-      tx = implicit_terms<Eigen::Dynamic>(q_inv_, g_, problem_.H, problem_.R, y, log_norm_);
+      tx = implicit_terms<Eigen::Dynamic>(q_inv_, g_, H, R, y, log_norm_);
   }
   engine_.move([&](std::size_t j, Eigen::VectorXd& x) {
     Slot& s = slots_[j];
@@ -232,8 +239,9 @@ void EnsembleFilter::forecast_and_weigh(const Eigen::VectorXd& y) {
     if (method == Method::kImplicit) {
       Rng rng({seed, c, j, purpose::kReference});
       bool bad = false;
-      const double lw = small ? implicit_move(t3, x, rng, options_.map, bad)
-                              : implicit_move(tx, x, rng, options_.map, bad);
+      const double lw = n == 3    ? implicit_move(t3, x, rng, options_.map, bad)
+                        : n == 10 ? implicit_move(t10, x, rng, options_.map, bad)
+                                  : implicit_move(tx, x, rng, options_.map, bad);
       failed[j] = bad ? 1 : 0;
       return lw;
     }

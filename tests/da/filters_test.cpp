@@ -196,6 +196,40 @@ TEST(ParticleFilters, ImplicitWeightsAreTheOptimalProposalsExactly) {
   }
 }
 
+// The same exactness in other dimensions: n = 10 takes the fixed-size path of the implicit
+// filter (the Lorenz-96 benchmark's size), n = 5 the dynamic one.
+TEST(ParticleFilters, ImplicitWeightsAreExactInEveryDimension) {
+  for (int n : {5, 10}) {
+    MatrixXd a = 0.9 * MatrixXd::Identity(n, n);
+    for (int i = 0; i + 1 < n; ++i) a(i, i + 1) = 0.1;
+    const int p = (n + 1) / 2;
+    MatrixXd h = MatrixXd::Zero(p, n);
+    for (int i = 0; i < p; ++i) h(i, 2 * i) = 1.0;
+    const MatrixXd q = 0.3 * MatrixXd::Identity(n, n), r = 0.5 * MatrixXd::Identity(p, p);
+    const Problem problem{std::make_shared<LinearModel>(a), h, r, q};
+    EnsembleFilter f(problem,
+                     {.method = Method::kImplicit, .members = 30, .resample_threshold = 0.0});
+    f.initialize(VectorXd::Constant(n, 1.0), MatrixXd::Identity(n, n));
+    const MatrixXd parents = f.members();
+    const VectorXd y = VectorXd::LinSpaced(p, -1.0, 2.0);
+    f.assimilate(y);
+    const Eigen::LLT<MatrixXd> s_llt(h * q * h.transpose() + r);
+    std::vector<double> log_p(30);
+    for (int j = 0; j < 30; ++j) {
+      const VectorXd d = y - h * a * parents.col(j);
+      log_p[static_cast<std::size_t>(j)] = -0.5 * d.dot(s_llt.solve(d));
+    }
+    const double top = *std::max_element(log_p.begin(), log_p.end());
+    double total = 0.0;
+    for (double l : log_p) total += std::exp(l - top);
+    for (int j = 0; j < 30; ++j)
+      EXPECT_NEAR(f.weights()[static_cast<std::size_t>(j)] * total /
+                      std::exp(log_p[static_cast<std::size_t>(j)] - top),
+                  1.0, 1e-9)
+          << "n = " << n << ", j = " << j;
+  }
+}
+
 TEST(TwinExperiment, RmseIsTheMeanOfTheScoredCyclesRootMeanSquareErrors) {
   TwinSettings s{.cycles = 6,
                  .interval = 1.0,
