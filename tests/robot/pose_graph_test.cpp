@@ -4,7 +4,10 @@
 // the filter's motion noise, the whole-or-nothing write, and every invalid graph refused.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
 #include <unistd.h>
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
 
 #include <cmath>
 #include <filesystem>
