@@ -245,8 +245,7 @@ void bind_mapping(py::module_& m) {
         o.range_min = number_arg(range_min, "range_min", 0.0, kInf);
         o.range_max = number_arg(range_max, "range_max", o.range_min, kInf, true);
         o.range_std = number_arg(range_std, "range_std", 0.0, kInf);
-        const auto s = static_cast<std::uint64_t>(
-            int_arg(seed, "seed", 0, std::numeric_limits<long long>::max()));
+        const auto s = seed_arg(seed, "seed");
         Rng rng({s, 0, 0, purpose::kData});
         return scan_dict(robot::simulate_scan(g, x, mount_arg(mount, "mount"), o, rng));
       },
@@ -404,8 +403,7 @@ void bind_odometry(py::module_& m) {
              const py::object& seed, const py::object& n) -> py::object {
             const Pose x = vec3_arg(pose, "pose");
             const Vec<3> du = vec3_arg(u, "u");
-            const auto s = static_cast<std::uint64_t>(
-                int_arg(seed, "seed", 0, std::numeric_limits<long long>::max()));
+            const auto s = seed_arg(seed, "seed");
             if (n.is_none()) {
               Rng rng({s, 0, 0, purpose::kProposal});
               return numpy_vec3(o.sample(x, du, rng));

@@ -116,7 +116,7 @@ PyLaserFilter make_filter(const py::object& grid, const py::object& proposal,
   filter::FilterOptions o;
   o.particles = static_cast<std::size_t>(
       particle_count_arg(particles, "particles", kMaxParticles, kPoseParticleBytes));
-  o.seed = static_cast<std::uint64_t>(int_arg(seed, "seed", 0, kMaxInt));
+  o.seed = seed_arg(seed, "seed");
   o.resample_threshold = number_arg(resample_threshold, "resample_threshold", 0.0, 1.0);
   const robot::OdometryModel motion(alphas_arg(alphas, "alphas"));
   if (py::isinstance<robot::BeamModel>(laser))
@@ -371,7 +371,7 @@ std::string run(const py::dict& kw, const py::object& progress) {
   s.particles = static_cast<std::size_t>(
       particle_count_arg(arg("particles"), "particles", kMaxParticles, kPoseParticleBytes));
   s.runs = static_cast<int>(int_arg(arg("runs"), "runs", 1, 100000));
-  s.seed = static_cast<std::uint64_t>(int_arg(arg("seed"), "seed", 0, kMaxInt));
+  s.seed = seed_arg(arg("seed"), "seed");
   // None keeps the experiment's defaults, so that a run without them is the tool's without them.
   if (!arg("alphas").is_none()) s.odometry_noise = alphas_arg(arg("alphas"), "alphas");
   s.filter_alphas = arg("filter_alphas").is_none()
