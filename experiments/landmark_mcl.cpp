@@ -472,7 +472,7 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   filter::ImplicitProposal implicit_proposal;
   implicit_proposal.map = s.map;
   ProgressBar bar(fmt::format("mcl {} M={}", s.method, s.particles),
-                  static_cast<std::size_t>(s.runs), ctx.show_progress());
+                  static_cast<std::size_t>(s.runs), ctx.show_progress(), ctx.progress);
   auto run_number = [&](std::size_t r) {
     // Every particle's randomness comes from Rng({seed * runs + run, step, particle, purpose}).
     filter::FilterOptions o = options;
@@ -483,6 +483,7 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   };
   const auto records = distribute_runs(
       ctx, "mcl", runs_key(s, ctx, setup), static_cast<std::size_t>(s.runs), [&](std::size_t r) {
+        bar.check();  // the bar ticks per run: after a stop, no run starts
         const LocalizationRun run = run_number(r);
         bar.tick();
         return record_of(run, filter::localization_metrics(run, problem.truth, options.particles));

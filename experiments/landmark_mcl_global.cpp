@@ -162,7 +162,7 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
       s.bearing_sd_deg, s.label_gate);
   ProgressBar bar(fmt::format("mcl {} {} M={}", s.init == "global" ? "global" : "kidnap", s.method,
                               s.particles),
-                  runs, ctx.show_progress());
+                  runs, ctx.show_progress(), ctx.progress);
   // Run r: its seed and start depend only on r, so any rank (or the CSV writer) can redo it.
   const auto run_number = [&](std::size_t r) {
     filter::FilterOptions o = options;
@@ -181,6 +181,7 @@ nlohmann::json run_global(const MclSettings& s, const RunContext& ctx, const Mot
     return std::make_pair(std::move(run), from);
   };
   const auto records = distribute_runs(ctx, "mcl-global", settings, runs, [&](std::size_t r) {
+    bar.check();  // the bar ticks per run: after a stop, no run starts
     const auto [run, from] = run_number(r);
     const filter::GlobalMetrics m = filter::global_metrics(run, problem, from);
     bar.tick();

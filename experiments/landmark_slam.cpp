@@ -524,7 +524,7 @@ nlohmann::json run_slam(const SlamSettings& s, const RunContext& ctx) {
     total_steps += logs.empty() ? 0 : logs[i % logs.size()].steps();
   if (logs.empty()) total_steps = k_runs * dataset(0).steps();  // one scenario: equal lengths
   ProgressBar bar(fmt::format("SLAM {} M={} steps", s.method, particles), total_steps,
-                  ctx.show_progress());
+                  ctx.show_progress(), ctx.progress);
   const auto records = distribute_runs(
       ctx, "slam", runs_key(s, ctx, particles, data.model), k_runs, [&](std::size_t i) {
         const slam::SlamDataset d = dataset(i);

@@ -21,23 +21,66 @@ ProgressBar::ProgressBar(std::string label, std::size_t total, bool enabled, Sty
       start_(std::chrono::steady_clock::now()),
       last_draw_(start_) {}
 
-ProgressBar::~ProgressBar() { finish(); }
+ProgressBar::ProgressBar(std::string label, std::size_t total, bool enabled, ProgressHook hook)
+    : ProgressBar(std::move(label), total, enabled) {
+  hook_ = std::move(hook);
+  last_report_ = start_;
+}
+
+ProgressBar::~ProgressBar() {
+  if (!enabled_ || finished_) return;
+  draw(true);
+  std::lock_guard lock(mutex_);
+  finished_ = true;
+}
 
 void ProgressBar::tick(std::size_t n) {
   done_.fetch_add(n);
+  if (hook_) report(false);
   if (enabled_) draw(false);
 }
 
 void ProgressBar::tick(std::size_t n, const std::string& note) {
   done_.fetch_add(n);
+  if (hook_) report(false);
   if (enabled_) draw(false, note);
 }
 
 void ProgressBar::finish() {
+  // The work is complete even when runs reused from --resume never ticked: the hook's last
+  // call says total.
+  if (hook_) {
+    done_.store(std::max(done_.load(), total_));
+    report(true);
+  }
   if (!enabled_ || finished_) return;
   draw(true);
   std::lock_guard lock(mutex_);
   finished_ = true;
+}
+
+void ProgressBar::check() const {
+  if (stopped_.load()) throw RunStopped();
+}
+
+void ProgressBar::report(bool final) {
+  check();
+  std::lock_guard lock(hook_mutex_);
+  check();  // another worker's call may have thrown while this one waited
+  // The count is read under the lock: calls never go backwards (as draw()).
+  const std::size_t done = std::min(done_.load(), total_);
+  if (reported_any_ && done == reported_) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (!final && done < total_ && now - last_report_ < std::chrono::milliseconds(100)) return;
+  last_report_ = now;
+  reported_ = done;
+  reported_any_ = true;
+  try {
+    hook_(done, total_);
+  } catch (...) {
+    stopped_.store(true);
+    throw;
+  }
 }
 
 void ProgressBar::draw(bool final, const std::string& note) {

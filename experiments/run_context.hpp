@@ -7,12 +7,28 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 
 #include "implicit/core/output_file.hpp"
 
 namespace implicit::experiments {
+
+/// A caller's view of progress (Python's progress=): called with (done, total) in the units of
+/// the run's bar, at most every 100 ms, with monotone counts, and once with (total, total) when
+/// the run completes. Calls are serialised but may come from any worker thread. Throwing stops
+/// the run: the exception reaches the caller of the experiment (the runs catch and report
+/// failures, so the caller keeps the original exception itself; python/src/runs.cpp).
+using ProgressHook = std::function<void(std::size_t done, std::size_t total)>;
+
+/// Thrown by ProgressBar::tick and check() once the hook has thrown: the other workers stop at
+/// their next tick, or before their next run, instead of finishing every run.
+class RunStopped : public std::runtime_error {
+ public:
+  RunStopped() : std::runtime_error("run stopped by its progress callback") {}
+};
 
 /// Progress on stderr: a bar with ETA when stderr is a terminal, plain lines otherwise,
 /// nothing when disabled (--quiet or --json). Thread-safe: tick() may be called from workers.
@@ -26,15 +42,25 @@ class ProgressBar {
  public:
   enum class Style { kAuto, kLines };
   ProgressBar(std::string label, std::size_t total, bool enabled, Style style = Style::kAuto);
+  /// The same, also reporting to `hook` (see ProgressHook) when it is set.
+  ProgressBar(std::string label, std::size_t total, bool enabled, ProgressHook hook);
+  /// Draws the final line only: the hook's final call is finish()'s, never a destructor's, which
+  /// may run while an exception unwinds (and must not throw).
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
   void tick(std::size_t n = 1);
   /// Like tick(n), and names what comes next in the printed line ("next: slit M=50").
   void tick(std::size_t n, const std::string& note);
+  /// Draws the final line and reports (total, total) to the hook, once.
   void finish();
+  /// Throws RunStopped when the hook has thrown: called before a run starts, so that runs
+  /// whose progress ticks only at their end do not start after a stop.
+  void check() const;
 
  private:
+  /// Calls the hook with the count read under its lock (monotone), throttled unless `final`.
+  void report(bool final);
   /// Prints the count at the time it holds the lock, so printed counts never decrease.
   void draw(bool final, const std::string& note = {});
   std::string label_;
@@ -48,6 +74,12 @@ class ProgressBar {
   std::chrono::steady_clock::time_point last_draw_;
   int last_percent_ = -1;
   bool finished_ = false;
+  ProgressHook hook_;
+  std::mutex hook_mutex_;
+  std::chrono::steady_clock::time_point last_report_;
+  std::size_t reported_ = 0;
+  bool reported_any_ = false;
+  std::atomic<bool> stopped_{false};
 };
 
 struct RunContext {
@@ -57,6 +89,7 @@ struct RunContext {
   bool quiet = false;             ///< no progress output
   bool json = false;              ///< --json mode: nothing extra on stderr either
   bool resume = false;            ///< reuse the runs kept in out_dir/.resume (parallel_runs.hpp)
+  ProgressHook progress;          ///< optional; empty = none (Python's progress=)
 
   bool show_progress() const { return !quiet && !json; }
   /// Path of a CSV file in out_dir (creates the folder); empty path when out_dir is empty.

@@ -5,14 +5,15 @@ import warnings
 from . import _implicit
 
 
-def call(fn, settings, seed, out, threads, verbose=False, given_as=None):
+def call(fn, settings, seed, out, threads, verbose=False, given_as=None, progress=None):
     """Runs an experiment of the command-line tool and returns its JSON result as a dict.
 
-    The settings, seed, out, threads and verbose are passed as given: the compiled side checks
-    each against the range of the tool's flag and names the keyword it refuses. given_as maps
-    a setting to the deprecated keyword the caller used for it, which a refusal then names."""
+    The settings, seed, out, threads, verbose and progress are passed as given: the compiled side
+    checks each against the range of the tool's flag (progress: a callable or None) and names the
+    keyword it refuses. given_as maps a setting to the deprecated keyword the caller used for it,
+    which a refusal then names."""
     try:
-        return json.loads(fn(settings, seed, out, threads, verbose))
+        return json.loads(fn(settings, seed, out, threads, verbose, progress))
     except _implicit.InvalidArgument as e:
         for key, old in (given_as or {}).items():
             if str(e).startswith(key + ":"):

@@ -18,7 +18,7 @@ def run(method="implicit", particles=100, runs=20, seed=1, data=None, config="A"
         kidnap_at=None, kidnap_skip=10.0, recovery="auto", recovery_alpha_slow=0.001,
         recovery_alpha_fast=0.1, kidnap_probability=1e-3, kld=False, kld_err=0.01, kld_z=0.99,
         min_particles=100, max_particles=5000, cover_spacing=2.0, cover_headings=8,
-        label_gate=27.631021115928547, verbose=False, bearing_sd=None):
+        label_gate=27.631021115928547, verbose=False, bearing_sd=None, progress=None):
     """Runs `implicit mcl` with these settings and returns its JSON result as a dict.
 
     Each argument is the CLI flag of the same name (docs/cli.md): method "standard"
@@ -34,7 +34,11 @@ def run(method="implicit", particles=100, runs=20, seed=1, data=None, config="A"
     cover_headings. label_gate: labelled detections whose d^2 against the predicted pose exceeds
     it are left out and counted ("labelled_gated"); 0 trusts every label. verbose: True draws
     the tool's progress bar (runs done, ETA) on stderr, as `implicit mcl` without --json does;
-    the result is the same either way.
+    the result is the same either way. progress, if given, is called as progress(runs done,
+    runs in all) after runs finish, with the interpreter's lock held, at most about 10 times a
+    second and once more with done = total at the end; done never decreases. An exception it
+    raises stops the run (with several threads too: the runs under way finish, no other starts)
+    and reaches the caller unchanged. The result is the same with or without it.
 
     Returns:
         dict with the keys of `implicit mcl --json` (rmse_m [m], error_percent_mean,
@@ -61,4 +65,5 @@ def run(method="implicit", particles=100, runs=20, seed=1, data=None, config="A"
         kld_err=kld_err, kld_z=kld_z, min_particles=min_particles, max_particles=max_particles,
         cover_spacing=cover_spacing, cover_headings=cover_headings, label_gate=label_gate)
     return _runs.call(_implicit._run_mcl, settings, seed, out, threads, verbose,
-                      given_as=None if bearing_sd is None else {"bearing_sd_deg": "bearing_sd"})
+                      given_as=None if bearing_sd is None else {"bearing_sd_deg": "bearing_sd"},
+                      progress=progress)

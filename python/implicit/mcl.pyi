@@ -1,4 +1,4 @@
-from typing import Any, Optional, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 def run(method: str = "implicit", particles: int = 100, runs: int = 20, seed: int = 1,
         data: Optional[str] = None, config: str = "A", p: Optional[float] = None,
@@ -15,4 +15,5 @@ def run(method: str = "implicit", particles: int = 100, runs: int = 20, seed: in
         kld_err: float = 0.01, kld_z: float = 0.99, min_particles: int = 100,
         max_particles: int = 5000, cover_spacing: float = 2.0,
         cover_headings: int = 8, label_gate: float = 27.631021115928547,
-        verbose: bool = False, bearing_sd: Optional[float] = None) -> dict[str, Any]: ...
+        verbose: bool = False, bearing_sd: Optional[float] = None,
+        progress: Optional[Callable[[int, int], Any]] = None) -> dict[str, Any]: ...

@@ -26,14 +26,19 @@ __all__ = ["Filter", "grid", "run"]
 def run(method="implicit", particles=100, datasets=50, seed=1, data=None, association="known",
         truth="paper", laser_every=1, control_noise=0.5, min_range=0.0, range_sd=0.0,
         bearing_sd_deg=0.0, gate_chi2=0.0, new_landmark_density=0.0, model=None, control_sd=None,
-        state_sd=None, out=None, threads=0, verbose=False, bearing_sd=None):
+        state_sd=None, out=None, threads=0, verbose=False, bearing_sd=None, progress=None):
     """Runs `implicit slam` with these settings and returns its JSON result as a dict.
 
     Each argument is the CLI flag of the same name (docs/cli.md); data None means the synthetic
     Car Park data sets, else a robot log; range_sd [m] and bearing_sd_deg [deg] (--range-sd,
     --bearing-sd; bearing_sd, the same in degrees, is deprecated); out a folder for CSV files.
     verbose: True draws the tool's progress bar (steps done, ETA) on stderr, as `implicit slam`
-    without --json does; the result is the same either way.
+    without --json does; the result is the same either way. progress, if given, is called as
+    progress(steps done, steps in all) (steps over all data sets, so that one long run moves
+    too), with the interpreter's lock held, at most about 10 times a second and once more with
+    done = total at the end; done never decreases. An exception it raises stops the run (with
+    several threads too: each data set stops at its next step) and reaches the caller
+    unchanged. The result is the same with or without it.
 
     Returns:
         dict with the keys of `implicit slam --json` (error_percent_mean, map_shape_m,
@@ -54,7 +59,8 @@ def run(method="implicit", particles=100, datasets=50, seed=1, data=None, associ
         gate_chi2=gate_chi2, new_landmark_density=new_landmark_density,
         model=model, control_sd=control_sd, state_sd=state_sd)
     return _runs.call(_implicit._run_slam, settings, seed, out, threads, verbose,
-                      given_as=None if bearing_sd is None else {"bearing_sd_deg": "bearing_sd"})
+                      given_as=None if bearing_sd is None else {"bearing_sd_deg": "bearing_sd"},
+                      progress=progress)
 
 
 def grid(data, method="implicit", particles=30, seed=1, alphas=(0.002,) * 4, max_scans=0,

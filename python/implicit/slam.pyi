@@ -30,7 +30,8 @@ def run(method: str = "implicit", particles: int = 100, datasets: int = 50, seed
         new_landmark_density: float = 0.0, model: Optional[str] = None,
         control_sd: Optional[list[float]] = None, state_sd: Optional[list[float]] = None,
         out: Optional[str] = None, threads: int = 0, verbose: bool = False,
-        bearing_sd: Optional[float] = None) -> dict[str, Any]: ...
+        bearing_sd: Optional[float] = None,
+        progress: Optional[Callable[[int, int], Any]] = None) -> dict[str, Any]: ...
 
 def grid(data: Union[str, "PathLike[str]", dict[str, Any]], method: str = "implicit",
          particles: int = 30, seed: int = 1,

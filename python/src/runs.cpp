@@ -5,6 +5,9 @@
 
 #include <pybind11/stl.h>
 
+#include <exception>
+#include <memory>
+
 #include <nlohmann/json.hpp>
 
 #include "common.hpp"
@@ -28,6 +31,46 @@ std::string run_json(const Settings& s, const experiments::RunContext& ctx, Run 
   return j.dump();
 }
 
+/// progress= of mcl.run and slam.run: the user's progress(done, total), or None. The hook also
+/// checks for Ctrl-C (only the main thread sees signals; it runs tasks too). Calls come from
+/// the run's workers, serialised by the bar (run_context.hpp); the interpreter's lock is taken
+/// for each.
+struct PythonProgress {
+  py::object callable;
+  std::exception_ptr error;  ///< the callback's exception (or Ctrl-C's), as raised
+
+  void operator()(std::size_t done, std::size_t total) {
+    py::gil_scoped_acquire locked;
+    try {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      if (!callable.is_none()) callable(done, total);
+    } catch (...) {
+      error = std::current_exception();
+      throw;
+    }
+  }
+};
+
+/// run_json with progress: the experiments catch a failed run's exception and report it as a
+/// message (parallel_runs.hpp), so the callback's own exception is kept here and raised
+/// unchanged in place of whatever the run then throws.
+template <typename Settings, typename Run>
+std::string run_json(const Settings& s, experiments::RunContext ctx, const py::object& progress,
+                     Run run) {
+  require(progress.is_none() || PyCallable_Check(progress.ptr()) != 0,
+          "progress: expected a callable progress(done, total) or None, got {}",
+          type_name(progress));
+  auto state = std::make_shared<PythonProgress>();
+  state->callable = progress;
+  ctx.progress = [state](std::size_t done, std::size_t total) { (*state)(done, total); };
+  try {
+    return run_json(s, ctx, run);
+  } catch (...) {
+    if (state->error) std::rethrow_exception(state->error);
+    throw;
+  }
+}
+
 }  // namespace
 
 void init_runs(py::module_& m) {
@@ -36,21 +79,23 @@ void init_runs(py::module_& m) {
   m.def(
       "_run_mcl",
       [](const py::dict& kw, const py::object& seed, const py::object& out,
-         const py::object& threads, const py::object& verbose) {
+         const py::object& threads, const py::object& verbose, const py::object& progress) {
         const experiments::MclSettings s = mcl_settings(kw);
-        return run_json(s, run_context(seed, out, threads, verbose), &experiments::run_mcl);
+        return run_json(s, run_context(seed, out, threads, verbose), progress,
+                        &experiments::run_mcl);
       },
       py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"),
-      py::arg("verbose") = false);
+      py::arg("verbose") = false, py::arg("progress") = py::none());
   m.def(
       "_run_slam",
       [](const py::dict& kw, const py::object& seed, const py::object& out,
-         const py::object& threads, const py::object& verbose) {
+         const py::object& threads, const py::object& verbose, const py::object& progress) {
         const experiments::SlamSettings s = slam_settings(kw);
-        return run_json(s, run_context(seed, out, threads, verbose), &experiments::run_slam);
+        return run_json(s, run_context(seed, out, threads, verbose), progress,
+                        &experiments::run_slam);
       },
       py::arg("settings"), py::arg("seed"), py::arg("out"), py::arg("threads"),
-      py::arg("verbose") = false);
+      py::arg("verbose") = false, py::arg("progress") = py::none());
   m.def(
       "_run_setting_ranges",
       [](const std::string& command) {

@@ -234,6 +234,10 @@ BAD_BINDINGS = [
      r"^runs: expected an integer >= 1, got 0$"),
     (mcl(verbose=1), r"^verbose: expected True or False, got int$"),
     (slam(verbose="yes"), r"^verbose: expected True or False, got str$"),
+    (mcl(progress=3),
+     r"^progress: expected a callable progress\(done, total\) or None, got int$"),
+    (slam(progress="bar"),
+     r"^progress: expected a callable progress\(done, total\) or None, got str$"),
     (mcl(particles=2 * 10**7), r"^particles: expected " + INT_MCL_M + r", got 20000000: "
      r"20000000 particles would take at least 1\.19 GiB \(64 bytes each\)$"),
     (lambda: implicit.ssm.particle_filter(
