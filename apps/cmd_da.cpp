@@ -54,9 +54,15 @@ void setup_da(CLI::App& sub) {
       ->check(in_range(1, 100000))
       ->capture_default_str();
   sub.add_option("--jitter", s.jitter,
-                 "Std of the Gaussian regularisation: added after resampling (bootstrap), the "
-                 "model noise Q = jitter^2 I (implicit)")
+                 "Std (iso) or factor on Silverman's bandwidth (cov) of the Gaussian "
+                 "regularisation: added after resampling (bootstrap), the model noise Q "
+                 "(implicit)")
       ->check(in_range(0.0, 1e6))
+      ->capture_default_str();
+  sub.add_option("--regularisation", s.regularisation,
+                 "Particle filters' regularisation: iso (jitter^2 I) or cov ((jitter h)^2 times "
+                 "the weighted ensemble covariance, h Silverman's bandwidth)")
+      ->check(CLI::IsMember({"iso", "cov"}))
       ->capture_default_str();
   sub.add_option("--inflation", s.inflation,
                  "Multiplicative inflation of the forecast anomalies "

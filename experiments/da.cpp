@@ -77,6 +77,7 @@ da::FilterOptions filter_options(const DaSettings& s, std::uint64_t seed) {
   o.method = da::parse_method(s.method);
   o.members = s.members;
   o.jitter = s.jitter;
+  o.regularisation = da::parse_regularisation(s.regularisation);
   o.inflation = s.inflation;
   o.resample_threshold = s.resample_threshold;
   require(s.map == "linear" || s.map == "random",
@@ -161,6 +162,7 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
       {"seeds", s.seeds},
       {"seed", ctx.seed},
       {"jitter", s.jitter},
+      {"regularisation", s.regularisation},
       {"inflation", s.inflation},
       {"resample_threshold", s.resample_threshold},
       {"map", s.map},

@@ -23,6 +23,7 @@ struct DaSettings {
   int members = 10;
   int seeds = 10;  ///< independent runs: seeds ctx.seed, ctx.seed + 1, ...
   double jitter = 0.0;
+  std::string regularisation = "iso";  ///< particle filters: iso or cov (filters.hpp)
   double inflation = 1.0;
   double resample_threshold = 0.5;
   std::string map = "linear";  ///< implicit filter: linear or random map
@@ -39,7 +40,7 @@ struct DaSetup {
 };
 DaSetup da_setup(const DaSettings& s, std::uint64_t seed);
 
-/// Keys: model, setting, dim, method, members, seeds, seed, jitter, inflation,
+/// Keys: model, setting, dim, method, members, seeds, seed, jitter, regularisation, inflation,
 /// resample_threshold, map, cycles, burn_in, rmse_a {mean, sd, ci95 [lo, hi]}, spread_a,
 /// mean_ess, ms_per_cycle, resamplings_per_run, sampling_failures, runs [{seed, rmse_a,
 /// spread_a, mean_ess, ms_per_cycle}], threads, seconds.

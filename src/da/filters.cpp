@@ -114,6 +114,58 @@ Method parse_method(std::string_view name) {
       "data assimilation method: expected bootstrap, implicit, enkf or etkf, got '{}'", name));
 }
 
+std::string_view to_string(Regularisation r) {
+  return r == Regularisation::kIsotropic ? "iso" : "cov";
+}
+
+Regularisation parse_regularisation(std::string_view name) {
+  for (auto r : {Regularisation::kIsotropic, Regularisation::kCovariance})
+    if (name == to_string(r)) return r;
+  throw InvalidArgument(
+      fmt::format("particle filter regularisation: expected iso or cov, got '{}'", name));
+}
+
+double silverman_bandwidth(int members, int dim) {
+  require(members >= 1 && dim >= 1,
+          "Silverman bandwidth: expected N >= 1 and n >= 1, got N = {}, n = {}", members, dim);
+  const double n = dim;
+  return std::pow(4.0 / (members * (n + 2.0)), 1.0 / (n + 4.0));
+}
+
+void weighted_covariance(std::span<const Eigen::VectorXd> members, std::span<const double> weights,
+                         Eigen::MatrixXd& cov) {
+  require(!members.empty() && members.size() == weights.size(),
+          "weighted covariance: expected one weight per member, got {} members, {} weights",
+          members.size(), weights.size());
+  const Eigen::Index n = members[0].size();
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(n);
+  for (std::size_t j = 0; j < members.size(); ++j) mean += weights[j] * members[j];
+  cov.setZero(n, n);
+  Eigen::VectorXd d(n);
+  for (std::size_t j = 0; j < members.size(); ++j) {
+    d = members[j] - mean;
+    cov.selfadjointView<Eigen::Lower>().rankUpdate(d, weights[j]);
+  }
+  cov.triangularView<Eigen::StrictlyUpper>() = cov.transpose();
+}
+
+double covariance_factor(const Eigen::MatrixXd& cov, Eigen::MatrixXd& lower) {
+  require(cov.allFinite(), "covariance regularisation: the ensemble covariance is not finite");
+  const Eigen::Index n = cov.rows();
+  Eigen::LLT<Eigen::MatrixXd> llt(cov);
+  double ridge = 0.0;
+  if (llt.info() != Eigen::Success) {
+    const double scale = cov.trace() / static_cast<double>(n);
+    ridge = scale > 0.0 ? 1e-10 * scale : 1e-12;
+    for (;; ridge *= 10.0) {
+      llt.compute(cov + ridge * Eigen::MatrixXd::Identity(n, n));
+      if (llt.info() == Eigen::Success) break;
+    }
+  }
+  lower = llt.matrixL();
+  return ridge;
+}
+
 void FilterOptions::validate(const Problem& p) const {
   require(members >= 2, "ensemble filter: expected at least 2 members (N), got {}", members);
   require(std::isfinite(jitter) && jitter >= 0.0,
@@ -125,7 +177,8 @@ void FilterOptions::validate(const Problem& p) const {
           resample_threshold);
   require(method != Method::kImplicit || p.stochastic() || jitter > 0.0,
           "implicit particle filter: the model is deterministic, so the jitter plays the role of "
-          "the model noise Q = jitter^2 I: expected a jitter > 0, got {}",
+          "the model noise Q = jitter^2 I (iso) or (jitter h)^2 C (cov): expected a jitter > 0, "
+          "got {}",
           jitter);
 }
 
@@ -144,14 +197,11 @@ EnsembleFilter::EnsembleFilter(Problem problem, FilterOptions options)
   log_det_2pi_r_ = p * kLog2Pi + log_det(lr_);
   if (problem_.stochastic()) lq_ = problem_.Q.llt().matrixL();
   if (options_.method == Method::kImplicit) {
-    Eigen::MatrixXd q =
-        problem_.stochastic()
-            ? problem_.Q
-            : Eigen::MatrixXd(options_.jitter * options_.jitter * Eigen::MatrixXd::Identity(n, n));
-    const Eigen::LLT<Eigen::MatrixXd> q_llt(q);
-    q_inv_ = q_llt.solve(Eigen::MatrixXd::Identity(n, n));
     g_ = problem_.H.transpose() * problem_.R.llt().solve(problem_.H);
-    log_norm_ = 0.5 * (n * kLog2Pi + log_det(q_llt.matrixL())) + 0.5 * log_det_2pi_r_;
+    // With covariance regularisation on a deterministic model, Q is set every cycle instead.
+    set_implicit_q(problem_.stochastic() ? problem_.Q
+                                         : Eigen::MatrixXd(options_.jitter * options_.jitter *
+                                                           Eigen::MatrixXd::Identity(n, n)));
   }
   ancestors_.reserve(slots_.size());
 }
@@ -187,6 +237,18 @@ void EnsembleFilter::initialize(const Eigen::MatrixXd& members) {
   initialized_ = true;
 }
 
+void EnsembleFilter::set_implicit_q(const Eigen::MatrixXd& q) {
+  const int n = problem_.dim();
+  const Eigen::LLT<Eigen::MatrixXd> q_llt(q);
+  q_inv_ = q_llt.solve(Eigen::MatrixXd::Identity(n, n));
+  log_norm_ = 0.5 * (n * kLog2Pi + log_det(q_llt.matrixL())) + 0.5 * log_det_2pi_r_;
+}
+
+void EnsembleFilter::factor_ensemble_covariance() {
+  weighted_covariance(engine_.particles(), engine_.weights(), cov_);
+  covariance_factor(cov_, cov_l_);
+}
+
 Eigen::MatrixXd EnsembleFilter::members() const {
   const auto ps = engine_.particles();
   Eigen::MatrixXd e(problem_.dim(), static_cast<Eigen::Index>(ps.size()));
@@ -218,6 +280,28 @@ void EnsembleFilter::forecast_and_weigh(const Eigen::VectorXd& y) {
   ImplicitTerms<10> t10;
   ImplicitTerms<Eigen::Dynamic> tx;
   const int n = problem_.dim();
+  const auto forecast = [&](std::size_t j, Eigen::VectorXd& x) {
+    Slot& s = slots_[j];
+    problem_.model->forecast(x, s.forecast);
+    if (noisy) {  // x += L_Q z: the model noise (the implicit filter samples it in F instead)
+      Rng rng({seed, c, j, purpose::kProcessNoise});
+      rng.fill_normal(s.noise);
+      x.noalias() += lq_ * s.noise;
+    }
+  };
+  // Implicit filter, deterministic model, covariance regularisation: Q = (jitter h)^2 C needs
+  // the whole forecast ensemble, so the forecast is a move of its own (increments 0) first.
+  const bool ensemble_q = method == Method::kImplicit && !problem_.stochastic() &&
+                          options_.regularisation == Regularisation::kCovariance;
+  if (ensemble_q) {
+    engine_.move([&](std::size_t j, Eigen::VectorXd& x) {
+      forecast(j, x);
+      return 0.0;
+    });
+    factor_ensemble_covariance();
+    const double s = options_.jitter * silverman_bandwidth(options_.members, n);
+    set_implicit_q(s * s * (cov_l_ * cov_l_.transpose()));
+  }
   if (method == Method::kImplicit) {
     const auto& H = problem_.H;
     const auto& R = problem_.R;
@@ -230,12 +314,7 @@ void EnsembleFilter::forecast_and_weigh(const Eigen::VectorXd& y) {
   }
   engine_.move([&](std::size_t j, Eigen::VectorXd& x) {
     Slot& s = slots_[j];
-    problem_.model->forecast(x, s.forecast);
-    if (noisy) {  // x += L_Q z: the model noise (the implicit filter samples it in F instead)
-      Rng rng({seed, c, j, purpose::kProcessNoise});
-      rng.fill_normal(s.noise);
-      x.noalias() += lq_ * s.noise;
-    }
+    if (!ensemble_q) forecast(j, x);
     if (method == Method::kImplicit) {
       Rng rng({seed, c, j, purpose::kReference});
       bool bad = false;
@@ -294,6 +373,9 @@ void EnsembleFilter::read_off_and_resample() {
   analysis_.spread = std::sqrt(var / n);
   analysis_.ess = particle ? r.ess : m;
   if (!particle || !needs_resampling(r.ess, ps.size(), options_.resample_threshold)) return;
+  const bool cov_jitter = method == Method::kBootstrap && options_.jitter > 0.0 &&
+                          options_.regularisation == Regularisation::kCovariance;
+  if (cov_jitter) factor_ensemble_covariance();  // of the weighted ensemble, before resampling
   Rng rng({options_.seed, static_cast<std::uint64_t>(cycle_), 0, purpose::kResampling});
   uniforms_.resize(uniforms_needed(ResamplingScheme::kSystematic, ps.size()));
   for (double& u : uniforms_) u = rng.uniform();
@@ -302,6 +384,18 @@ void EnsembleFilter::read_off_and_resample() {
   analysis_.resampled = true;
   if (method != Method::kBootstrap || options_.jitter == 0.0) return;
   const auto c = static_cast<std::uint64_t>(cycle_);
+  if (cov_jitter) {  // x += jitter h L N(0, I), L L^T = C
+    // Scaled once here: (scale * L) * z inside the move would build an n x n temporary per member.
+    cov_l_ *= options_.jitter * silverman_bandwidth(options_.members, n);
+    engine_.move([&](std::size_t j, Eigen::VectorXd& x) {
+      Rng jitter_rng({options_.seed, c, j, kJitter});
+      Eigen::VectorXd& z = slots_[j].noise;
+      jitter_rng.fill_normal(z);
+      x.noalias() += cov_l_ * z;
+      return 0.0;
+    });
+    return;
+  }
   engine_.move([&](std::size_t j, Eigen::VectorXd& x) {  // regularisation: x += jitter N(0, I)
     Rng jitter_rng({options_.seed, c, j, kJitter});
     for (Eigen::Index i = 0; i < x.size(); ++i) x(i) += options_.jitter * jitter_rng.normal();

@@ -17,14 +17,19 @@
 // bit-identical for any number of threads.
 //
 // Bootstrap: members move with the model (plus Q noise), weights multiply by p(y | x); when
-// N_eff < resample_threshold N the population is resampled (systematic) and `jitter` * N(0, I)
-// is added to every member (regularisation).
+// N_eff < resample_threshold N the population is resampled (systematic) and every member is
+// regularised: `jitter` * N(0, I) is added (Regularisation::kIsotropic), or, with
+// Regularisation::kCovariance, `jitter` * h * L * N(0, I), where L L^T = C is the weighted
+// covariance of the ensemble before resampling and h = (4 / (N (n + 2)))^(1 / (n + 4)) is
+// Silverman's bandwidth: `jitter` is then a factor on a kernel width that shrinks with N.
 // Implicit: each member x' is moved by implicit sampling of
 //   F(x) = 1/2 |x - M(x')|^2_{Q^-1} + 1/2 |y - H x|^2_{R^-1} + 1/2 log det 2 pi Q
 //          + 1/2 log det 2 pi R,
 // minimised by core's Newton and sampled by the linear (or random) map with core's exact weight,
 // whose expectation over the reference variable is p(y | x'). A deterministic model has no Q: the
-// jitter plays its role, Q = jitter^2 I, and no jitter is added after resampling.
+// jitter plays its role, Q = jitter^2 I (isotropic), or Q = (jitter h)^2 C with C the weighted
+// covariance of the forecast ensemble of the cycle (covariance regularisation), and no jitter is
+// added after resampling.
 // EnKF / ETKF: forecast anomalies are multiplied by `inflation`, then the perturbed-observation
 // (observation perturbations not re-centred) or the symmetric square-root analysis.
 
@@ -42,15 +47,20 @@ namespace implicit::da {
 
 enum class Method { kBootstrap, kImplicit, kEnkf, kEtkf };
 enum class ImplicitMap { kLinear, kRandom };
+enum class Regularisation { kIsotropic, kCovariance };
 
 std::string_view to_string(Method m);
 /// "bootstrap", "implicit", "enkf" or "etkf"; throws InvalidArgument otherwise.
 Method parse_method(std::string_view name);
+std::string_view to_string(Regularisation r);
+/// "iso" or "cov"; throws InvalidArgument otherwise.
+Regularisation parse_regularisation(std::string_view name);
 
 struct FilterOptions {
   Method method = Method::kEtkf;
-  int members = 10;                 ///< N, at least 2
-  double jitter = 0.0;              ///< std of the regularisation (see the file comment)
+  int members = 10;     ///< N, at least 2
+  double jitter = 0.0;  ///< std (isotropic) or factor (covariance) of the regularisation
+  Regularisation regularisation = Regularisation::kIsotropic;
   double inflation = 1.0;           ///< multiplicative on the forecast anomalies (EnKF, ETKF)
   double resample_threshold = 0.5;  ///< resample when N_eff < threshold * N (particle filters)
   ImplicitMap map = ImplicitMap::kLinear;
@@ -99,6 +109,8 @@ class EnsembleFilter {
   void forecast_and_weigh(const Eigen::VectorXd& y);
   void ensemble_analysis(const Eigen::VectorXd& y);
   void read_off_and_resample();
+  void factor_ensemble_covariance();  ///< cov_, cov_l_ from the current members and weights
+  void set_implicit_q(const Eigen::MatrixXd& q);  ///< q_inv_, log_norm_
 
   Problem problem_;
   FilterOptions options_;
@@ -106,15 +118,31 @@ class EnsembleFilter {
   std::vector<Slot> slots_;
   std::vector<std::size_t> ancestors_;
   std::vector<double> uniforms_;
-  Eigen::MatrixXd lq_, lr_;     ///< Cholesky factors of Q (empty: none) and R
-  Eigen::MatrixXd q_inv_, g_;   ///< implicit: Q^-1 (Q = jitter^2 I if deterministic), H^T R^-1 H
-  double log_norm_ = 0.0;       ///< 1/2 log det 2 pi Q + 1/2 log det 2 pi R (implicit F)
-  double log_det_2pi_r_ = 0.0;  ///< log det 2 pi R (bootstrap likelihood)
-  Eigen::MatrixXd ensemble_;    ///< EnKF / ETKF work matrix, n x N
+  Eigen::MatrixXd lq_, lr_;      ///< Cholesky factors of Q (empty: none) and R
+  Eigen::MatrixXd q_inv_, g_;    ///< implicit: Q^-1 (Q = jitter^2 I if deterministic), H^T R^-1 H
+  double log_norm_ = 0.0;        ///< 1/2 log det 2 pi Q + 1/2 log det 2 pi R (implicit F)
+  double log_det_2pi_r_ = 0.0;   ///< log det 2 pi R (bootstrap likelihood)
+  Eigen::MatrixXd ensemble_;     ///< EnKF / ETKF work matrix, n x N
+  Eigen::MatrixXd cov_, cov_l_;  ///< covariance regularisation: C and its Cholesky factor
   Analysis analysis_;
   long cycle_ = 0;
   bool initialized_ = false;
 };
+
+/// Silverman's rule-of-thumb bandwidth h = (4 / (N (n + 2)))^(1 / (n + 4)) of a Gaussian kernel
+/// density estimate from N samples in dimension n (N, n >= 1).
+double silverman_bandwidth(int members, int dim);
+
+/// C = sum_j w_j (x_j - xbar)(x_j - xbar)^T with xbar = sum_j w_j x_j (weights normalised),
+/// summed serially in member order (the same bits for any thread count).
+void weighted_covariance(std::span<const Eigen::VectorXd> members, std::span<const double> weights,
+                         Eigen::MatrixXd& cov);
+
+/// The lower Cholesky factor of `cov` into `lower`. A covariance that is not numerically positive
+/// definite (members collapsed onto one point or a subspace) gets a ridge eps I added first, eps
+/// = 1e-10 times its mean variance (1e-12 if that is 0), multiplied by 10 until the factor exists:
+/// the regularisation then stays (almost) within the ensemble's span. Returns the ridge (0: none).
+double covariance_factor(const Eigen::MatrixXd& cov, Eigen::MatrixXd& lower);
 
 /// The perturbed-observation EnKF analysis of the members E (columns, already inflated):
 /// K = A S^T (S S^T + (N-1) R)^-1 with A the anomalies and S = H A, and each member moved by
