@@ -170,7 +170,9 @@ TEST(PoseGraphLandmarks, PointInformationIsTheInverseCovarianceOfThePoint) {
   const PoseGraphPointEdge2 e = range_bearing_point_edge(0, 0, z, sigma2);
   Rng rng({.seed = 13, .purpose = purpose::kUser});
   const Mat2 cov = pg_landmark_whitened_covariance<2>(e.information, 200000, [&] {
-    const Measurement zn(z(0) + 0.2 * rng.normal(), z(1) + 0.03 * rng.normal());
+    const double range_noise = 0.2 * rng.normal();
+    const double bearing_noise = 0.03 * rng.normal();
+    const Measurement zn(z(0) + range_noise, z(1) + bearing_noise);
     return Vec<2>(Vec<2>(zn(0) * std::sin(zn(1)), -zn(0) * std::cos(zn(1))) - e.measurement);
   });
   EXPECT_LE((cov - Mat2::Identity()).cwiseAbs().maxCoeff(), 0.02) << cov;
