@@ -92,6 +92,12 @@ void add_laser_options(CLI::App& sub, LaserCommand& l) {
       ->capture_default_str();
   sub.add_option("--max-updates", s.data.max_updates, "laser: use the first N updates (0: all)")
       ->check(in_range(0, 100000000));
+  sub.add_option("--estimate", l.estimate,
+                 "laser: the pose reported at each update: mean (of all particles) or cluster "
+                 "(the weighted mean of the heaviest cluster, as AMCL reports; stays on one place "
+                 "while the posterior has several)")
+      ->check(CLI::IsMember({"mean", "cluster"}))
+      ->capture_default_str();
   sub.add_option("--global-updates", s.global_updates,
                  "laser, --init global: a start succeeds if the error is below "
                  "--global-radius from this update on")
@@ -188,6 +194,7 @@ void run_laser_mcl_command(const MclSettings& shared, const std::string& map_fil
   s.laser.aggregation = l.aggregation == "cubed-sum" ? robot::BeamAggregation::kCubedSum
                                                      : robot::BeamAggregation::kProduct;
   s.laser_model = experiments::parse_laser_model(l.laser_model);
+  s.estimate = experiments::parse_estimate(l.estimate);
   // The shared parameters (nav2's names) mean the same in both models.
   s.beam.z_hit = s.laser.z_hit;
   s.beam.z_rand = s.laser.z_rand;

@@ -24,10 +24,11 @@ struct LaserCommand {
   std::vector<double> alphas, filter_alphas;
   std::string interpolation = "bicubic", aggregation = "product";
   std::string laser_model = "likelihood-field";
-  BagFlags bag;                  ///< a ROS bag as --data: its topics and frames
-  std::string trajectory;        ///< TUM file of the first run's estimate
-  std::string truth_trajectory;  ///< TUM file of the reference (--truth-trajectory)
-  std::string params;            ///< --params: a nav2 parameter file (its amcl block)
+  std::string estimate = "mean";  ///< --estimate: mean | cluster
+  BagFlags bag;                   ///< a ROS bag as --data: its topics and frames
+  std::string trajectory;         ///< TUM file of the first run's estimate
+  std::string truth_trajectory;   ///< TUM file of the reference (--truth-trajectory)
+  std::string params;             ///< --params: a nav2 parameter file (its amcl block)
   std::optional<Nav2ParamsRecord> params_record;  ///< what --params set, for the JSON
 };
 

@@ -16,6 +16,7 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/weights.hpp"
 #include "implicit/filter/monte_carlo_localization.hpp"
+#include "implicit/filter/pose_clusters.hpp"
 #include "implicit/robot/distance_field.hpp"
 
 namespace implicit::experiments {
@@ -29,6 +30,17 @@ LaserModelKind parse_laser_model(std::string_view text) {
   if (text == "beam") return LaserModelKind::kBeam;
   throw InvalidArgument(fmt::format("expected a laser model 'likelihood-field' or 'beam', got '{}'",
                                     printable(text)));
+}
+
+std::string_view to_string(EstimateKind e) {
+  return e == EstimateKind::kHeaviestCluster ? "cluster" : "mean";
+}
+
+EstimateKind parse_estimate(std::string_view text) {
+  if (text == "mean") return EstimateKind::kMean;
+  if (text == "cluster") return EstimateKind::kHeaviestCluster;
+  throw InvalidArgument(
+      fmt::format("expected an estimate 'mean' or 'cluster', got '{}'", printable(text)));
 }
 
 void LaserMclSettings::validate() const {
@@ -84,15 +96,21 @@ struct Track {
 /// Runs one filter over updates [first, last] (the filter starts at update `first`, already
 /// initialised there) and records the estimate at each update.
 template <typename Filter>
+robot::Pose estimate_of(const Filter& pf, EstimateKind kind) {
+  if (kind == EstimateKind::kMean) return pf.last().mean;
+  return filter::heaviest_cluster(pf.particles(), pf.weights()).mean;
+}
+
+template <typename Filter>
 void follow(Filter& pf, const LaserDataset& d, const std::vector<Vec<3>>& odometry,
-            std::size_t first, std::size_t last, Track& t) {
+            std::size_t first, std::size_t last, EstimateKind estimate, Track& t) {
   for (std::size_t k = first + 1; k <= last; ++k) {
     const double c0 = seconds_of_cpu();
     const filter::StepSummary& s =
         pf.step(odometry[k], d.scans[k], "laser update " + std::to_string(k));
     t.cpu_seconds += seconds_of_cpu() - c0;
     ++t.updates;
-    t.estimates.push_back(s.mean);
+    t.estimates.push_back(estimate == EstimateKind::kMean ? s.mean : estimate_of(pf, estimate));
     t.ess_fraction.push_back(s.ess / static_cast<double>(s.particles));
     t.particles.push_back(static_cast<double>(s.particles));
     t.newton.push_back(s.newton_evaluations);
@@ -144,10 +162,10 @@ Track run_one(const LaserMclSettings& s, const LaserDataset& d, const Model& mod
   } else {
     const GlobalStart g = start_anywhere(s, d, model, *space, first, seed);
     pf.initialize(g.particles, g.log_weights);
-    t.estimates.push_back(pf.last().mean);
+    t.estimates.push_back(estimate_of(pf, s.estimate));
   }
   t.ess_fraction.push_back(1.0);
-  follow(pf, d, odometry, first, last, t);
+  follow(pf, d, odometry, first, last, s.estimate, t);
   return t;
 }
 
@@ -316,6 +334,7 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
   j["proposal"] = to_string(s.proposal);
   j["implicit_map"] = s.implicit_map == filter::ImplicitMap::kLinear ? "linear" : "random";
   j["start"] = to_string(s.start);
+  j["estimate"] = to_string(s.estimate);
   j["implicit_starts"] = s.implicit_starts;
   j["implicit_defensive"] = s.implicit_defensive;
   j["particles"] = s.particles;

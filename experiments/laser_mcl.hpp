@@ -61,6 +61,14 @@ std::string_view to_string(LaserModelKind m);
 /// "likelihood-field" or "beam"; InvalidArgument otherwise.
 LaserModelKind parse_laser_model(std::string_view text);
 
+/// The pose a run reports at each update: the weighted mean of all particles, or the weighted
+/// mean of the heaviest cluster (filter/pose_clusters.hpp; what AMCL reports), which stays on one
+/// place while the posterior still has several.
+enum class EstimateKind { kMean, kHeaviestCluster };
+std::string_view to_string(EstimateKind e);
+/// "mean" or "cluster"; InvalidArgument otherwise.
+EstimateKind parse_estimate(std::string_view text);
+
 /// Interpolation of the distance field, from text ("nearest", "bilinear", "bicubic").
 robot::Interpolation parse_interpolation(std::string_view text);
 std::string_view to_string(robot::Interpolation i);
@@ -140,6 +148,7 @@ struct LaserMclSettings {
   /// heading error below 0.3 rad) at update global_updates and stays so to the end.
   double global_success_radius = 0.5;
   int global_updates = 10;
+  EstimateKind estimate = EstimateKind::kMean;
   bool keep_tracks = false;  ///< keep each run's estimates (for figures)
   void validate() const;
 };
