@@ -55,6 +55,7 @@
 #include "implicit/filter/observation_proposals.hpp"
 #include "implicit/filter/particle_engine.hpp"
 #include "implicit/filter/particle_filter.hpp"
+#include "implicit/filter/pose_clusters.hpp"
 #include "implicit/filter/pose_moments.hpp"
 #include "implicit/filter/pose_objective.hpp"
 #include "implicit/filter/proposals.hpp"
