@@ -356,6 +356,8 @@ void add_summary_json(nlohmann::json& j, const MclSummary& m) {
   j["error_percent_median"] = median_of(m.err);
   j["error_percent_runs"] = m.err;
   j["rmse_m"] = mean_of(m.rmse);
+  // The name every mcl and slam output shares (docs/cli.md, "Names shared by mcl and slam").
+  j["position_rmse_m"] = mean_of(m.rmse);
   j["rmse_m_std"] = sd_of(m.rmse);
   j["rmse_m_median"] = median_of(m.rmse);
   j["max_error_m_median"] = median_of(m.max_err);

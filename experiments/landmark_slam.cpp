@@ -420,6 +420,10 @@ void add_metrics_json(nlohmann::json& j, const SlamColumns& c, bool is_ekf) {
   j["ess_std"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(stddev(c.ess));
   j["resamplings_std"] = is_ekf ? nlohmann::json(nullptr) : nlohmann::json(stddev(c.res));
   j["rmse_pose_m"] = mean(c.rmse_p);
+  // The names every mcl and slam output shares (docs/cli.md, "Names shared by mcl and slam").
+  j["position_rmse_m"] = mean(c.rmse_p);
+  j["heading_rmse_rad"] = mean(c.rmse_h);
+  j["resamplings_mean"] = j["resamplings"];
   j["rmse_pose_m_std"] = stddev(c.rmse_p);
   j["rmse_pose_aligned_m"] = mean(c.rmse_pa);
   j["rmse_heading_rad"] = mean(c.rmse_h);
