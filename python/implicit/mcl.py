@@ -41,8 +41,9 @@ def run(method="implicit", particles=100, runs=20, seed=1, data=None, config="A"
     and reaches the caller unchanged. The result is the same with or without it.
 
     Returns:
-        dict with the keys of `implicit mcl --json` (rmse_m [m], error_percent_mean,
-        heading_rmse_rad, ess_mean, cpu_ms_per_step, lost_runs, ...; a global or kidnapping run:
+        dict with the keys of `implicit mcl --json` (position_rmse_m [m] (alias rmse_m),
+        error_percent_mean, heading_rmse_rad, ess_mean, resamplings_mean, cpu_ms_per_step,
+        lost_runs, ...; a global or kidnapping run:
         global_success_rate or kidnap_recovery_rate, the median times, particles_mean, ...), the
         same numbers for the same seed. Timing keys differ from run to run.
 

@@ -42,7 +42,8 @@ def run(method="implicit", particles=100, datasets=50, seed=1, data=None, associ
 
     Returns:
         dict with the keys of `implicit slam --json` (error_percent_mean, map_shape_m,
-        rmse_pose_m, ess_mean, ...), the same numbers for the same seed.
+        position_rmse_m (alias rmse_pose_m), heading_rmse_rad, ess_mean, resamplings_mean,
+        ...), the same numbers for the same seed.
 
     Raises:
         implicit.InvalidArgument (a ValueError) naming the keyword, for a value the CLI refuses:
