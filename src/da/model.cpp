@@ -7,6 +7,11 @@
 
 namespace implicit::da {
 
+void Model::forecast_jacobian(Eigen::VectorXd&, Eigen::MatrixXd&, ForecastWorkspace&) const {
+  throw InvalidArgument(
+      fmt::format("model {}: has no derivative of its forecast (needed by the smoother)", name()));
+}
+
 LinearModel::LinearModel(Eigen::MatrixXd a) : a_(std::move(a)) {
   require(a_.rows() == a_.cols() && a_.rows() >= 1,
           "linear model: expected a square matrix A, got {} x {}", a_.rows(), a_.cols());
@@ -17,6 +22,12 @@ void LinearModel::forecast(Eigen::VectorXd& x, ForecastWorkspace& w) const {
   // x = A x would alias; the workspace's stage vector holds the product.
   w.l96.stage.noalias() = a_ * x;
   x = w.l96.stage;
+}
+
+void LinearModel::forecast_jacobian(Eigen::VectorXd& x, Eigen::MatrixXd& jacobian,
+                                    ForecastWorkspace& w) const {
+  forecast(x, w);
+  jacobian = a_;
 }
 
 Lorenz63Model::Lorenz63Model(const Lorenz63& l, double dt, int substeps)
@@ -34,6 +45,15 @@ void Lorenz63Model::forecast(Eigen::VectorXd& x, ForecastWorkspace&) const {
   x = v;
 }
 
+void Lorenz63Model::forecast_jacobian(Eigen::VectorXd& x, Eigen::MatrixXd& jacobian,
+                                      ForecastWorkspace&) const {
+  Vec<3> v = x;
+  Mat<3> j;
+  l_.steps(v, dt_, substeps_, &j);
+  x = v;
+  jacobian = j;
+}
+
 Lorenz96Model::Lorenz96Model(const Lorenz96& l, double dt, int substeps)
     : l_(l), dt_(dt), substeps_(substeps) {
   require(std::isfinite(dt) && dt > 0.0, "Lorenz-96: expected a positive step dt, got {}", dt);
@@ -43,6 +63,11 @@ Lorenz96Model::Lorenz96Model(const Lorenz96& l, double dt, int substeps)
 
 void Lorenz96Model::forecast(Eigen::VectorXd& x, ForecastWorkspace& w) const {
   l_.steps(x, dt_, substeps_, w.l96);
+}
+
+void Lorenz96Model::forecast_jacobian(Eigen::VectorXd& x, Eigen::MatrixXd& jacobian,
+                                      ForecastWorkspace& w) const {
+  l_.steps(x, dt_, substeps_, w.l96, &jacobian);
 }
 
 void require_spd(const Eigen::MatrixXd& m, int size, const char* what) {

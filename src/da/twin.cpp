@@ -22,7 +22,9 @@ double analysis_rmse(std::span<const Eigen::VectorXd> means, std::span<const Eig
   return sum / static_cast<double>(means.size() - first);
 }
 
-TwinResult run_twin(const Problem& p, const FilterOptions& o, const TwinSettings& s) {
+namespace {
+
+void check_settings(const TwinSettings& s) {
   require(s.cycles >= 1, "twin experiment: expected at least 1 cycle, got {}", s.cycles);
   require(std::isfinite(s.interval) && s.interval > 0.0,
           "twin experiment: expected a positive time between observations, got {}", s.interval);
@@ -31,7 +33,12 @@ TwinResult run_twin(const Problem& p, const FilterOptions& o, const TwinSettings
   require(s.cycles * s.interval > s.burn_in,
           "twin experiment: the burn-in {} covers all {} cycles ({} time units): nothing to score",
           s.burn_in, s.cycles, s.cycles * s.interval);
-  EnsembleFilter filter(p, o);  // validates p and o
+}
+
+/// The truth, the observations and the scores around any assimilator with
+/// `const Analysis& assimilate(const Eigen::VectorXd&)` (an EnsembleFilter or ImplicitSmoother).
+template <typename Assimilator>
+TwinResult run_twin_with(const Problem& p, Assimilator& filter, const TwinSettings& s) {
   require(s.truth0.size() == p.dim() && s.truth0.allFinite(),
           "twin experiment: expected a finite initial truth of size {}, got size {}", p.dim(),
           s.truth0.size());
@@ -77,6 +84,20 @@ TwinResult run_twin(const Problem& p, const FilterOptions& o, const TwinSettings
   r.mean_ess = ess_sum / r.scored_cycles;
   r.ms_per_cycle = 1e3 * seconds / s.cycles;
   return r;
+}
+
+}  // namespace
+
+TwinResult run_twin(const Problem& p, const FilterOptions& o, const TwinSettings& s) {
+  check_settings(s);
+  EnsembleFilter filter(p, o);  // validates p and o
+  return run_twin_with(p, filter, s);
+}
+
+TwinResult run_twin(const Problem& p, const SmootherOptions& o, const TwinSettings& s) {
+  check_settings(s);
+  ImplicitSmoother smoother(p, o);  // validates p and o
+  return run_twin_with(p, smoother, s);
 }
 
 }  // namespace implicit::da

@@ -32,6 +32,11 @@ class Model {
   virtual int dim() const = 0;
   /// Advances x (of size dim()) by one observation interval.
   virtual void forecast(Eigen::VectorXd& x, ForecastWorkspace& w) const = 0;
+  /// Advances x by one observation interval and sets `jacobian` (n x n) to dM/dx at the start
+  /// (the implicit smoother's Gauss-Newton). The default throws InvalidArgument: a model
+  /// without a derivative cannot be smoothed.
+  virtual void forecast_jacobian(Eigen::VectorXd& x, Eigen::MatrixXd& jacobian,
+                                 ForecastWorkspace& w) const;
   /// Sizes a workspace for this model.
   virtual void prepare(ForecastWorkspace& w) const { (void)w; }
   virtual std::string name() const = 0;
@@ -43,6 +48,8 @@ class LinearModel final : public Model {
   explicit LinearModel(Eigen::MatrixXd a);
   int dim() const override { return static_cast<int>(a_.rows()); }
   void forecast(Eigen::VectorXd& x, ForecastWorkspace& w) const override;
+  void forecast_jacobian(Eigen::VectorXd& x, Eigen::MatrixXd& jacobian,
+                         ForecastWorkspace& w) const override;
   std::string name() const override { return "linear"; }
   const Eigen::MatrixXd& matrix() const { return a_; }
 
@@ -56,6 +63,8 @@ class Lorenz63Model final : public Model {
   Lorenz63Model(const Lorenz63& l, double dt, int substeps);
   int dim() const override { return 3; }
   void forecast(Eigen::VectorXd& x, ForecastWorkspace& w) const override;
+  void forecast_jacobian(Eigen::VectorXd& x, Eigen::MatrixXd& jacobian,
+                         ForecastWorkspace& w) const override;
   std::string name() const override { return "lorenz63"; }
 
  private:
@@ -70,6 +79,8 @@ class Lorenz96Model final : public Model {
   Lorenz96Model(const Lorenz96& l, double dt, int substeps);
   int dim() const override { return l_.dim(); }
   void forecast(Eigen::VectorXd& x, ForecastWorkspace& w) const override;
+  void forecast_jacobian(Eigen::VectorXd& x, Eigen::MatrixXd& jacobian,
+                         ForecastWorkspace& w) const override;
   void prepare(ForecastWorkspace& w) const override { w.l96.resize(l_.dim()); }
   std::string name() const override { return "lorenz96"; }
 

@@ -1,7 +1,7 @@
 #pragma once
 // A twin experiment: a truth run of the problem's model, observations of it drawn with the seed,
-// one ensemble filter assimilating them, and the scores of the analysis (docs/specification.md,
-// "Data assimilation"):
+// one ensemble filter (or the implicit smoother) assimilating them, and the scores of the analysis
+// (docs/specification.md, "Data assimilation"):
 //
 //   rmse.a   = mean over scored cycles k of sqrt(|xbar_a(k) - x_true(k)|^2 / n)
 //   spread.a = mean over scored cycles of the analysis spread (filters.hpp)
@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 
 #include "implicit/da/filters.hpp"
+#include "implicit/da/smoother.hpp"
 
 namespace implicit::da {
 
@@ -50,6 +51,9 @@ struct TwinResult {
 /// Runs the twin experiment; throws InvalidArgument for cycles < 1, a non-positive interval, a
 /// negative or NaN burn-in, a burn-in that leaves no cycle to score, or wrong sizes.
 TwinResult run_twin(const Problem& p, const FilterOptions& o, const TwinSettings& s);
+/// The same twin experiment with the implicit smoother (smoother.hpp): the analysis scored at
+/// each cycle is its filtering analysis at the observation's time.
+TwinResult run_twin(const Problem& p, const SmootherOptions& o, const TwinSettings& s);
 
 /// rmse.a of analysis means against truths (same length), over the entries from `first` on.
 double analysis_rmse(std::span<const Eigen::VectorXd> means, std::span<const Eigen::VectorXd> truth,
