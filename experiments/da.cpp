@@ -115,12 +115,13 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
   }
   const auto runs = static_cast<std::size_t>(s.seeds);
   std::vector<da::TwinResult> results(runs);
-  ProgressBar bar("da runs", runs, ctx.show_progress());
+  ProgressBar bar("da runs", runs, ctx.show_progress(), ctx.progress);
   // Seeds in parallel (each filter also spreads its members); every run is keyed by its seed,
   // so the numbers do not depend on the thread count.
   parallel_for(
       runs,
       [&](std::size_t r) {
+        bar.check();  // the bar ticks per seed: after the hook has thrown, no run starts
         const std::uint64_t seed = ctx.seed + r;
         const DaSetup d = da_setup(s, seed);
         results[r] = da::run_twin(d.problem, filter_options(s, seed), d.twin);

@@ -15,6 +15,8 @@ grid: grid SLAM on a laser log, its map a numpy array), implicit.mcl.run; implic
 (occupancy grids, CARMEN logs, the likelihood field, the odometry model, a laser ParticleFilter
 and run). Control (spec §2): implicit.control.
 Trajectory scoring (APE, RPE as evo computes them): implicit.eval.
+Data assimilation (spec §3.14): implicit.da (run: the benchmarks of `implicit da` as a dict;
+Lorenz63, Lorenz96: the models, their RK4 steps and the steps' Jacobian).
 Many runs (seeds x settings, optionally in worker processes, with a progress bar):
 multi_run(fn, seeds, settings); summarize(rows) gives the mean and standard error per group.
 Your own state-space model (numpy callbacks on all particles at once; bootstrap, implicit or
@@ -36,7 +38,7 @@ from ._core import SampleResult, SamplerWarning, ess, log_sum_exp, resample, sam
 from ._implicit import InvalidArgument, ParseError, __version__  # noqa: E402
 from ._implicit import ParticleFilter  # noqa: E402
 from ._multi_run import MultiRunError, RunList, multi_run, summarize  # noqa: E402
-from . import control, data, eval, laser, mcl, models, slam, ssm  # noqa: E402
+from . import control, da, data, eval, laser, mcl, models, slam, ssm  # noqa: E402
 
 __all__ = [
     "InvalidArgument",
@@ -48,6 +50,7 @@ __all__ = [
     "SamplerWarning",
     "__version__",
     "control",
+    "da",
     "data",
     "ess",
     "eval",

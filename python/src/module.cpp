@@ -19,6 +19,7 @@ void init_control(py::module_& m);
 void init_laser(py::module_& m);
 void init_eval(py::module_& m);
 void init_user_model(py::module_& m);
+void init_da(py::module_& m);
 }  // namespace implicit::python
 
 PYBIND11_MODULE(_implicit, m) {
@@ -45,5 +46,7 @@ PYBIND11_MODULE(_implicit, m) {
   auto eval = m.def_submodule("eval", "Trajectory scoring: APE and RPE.");
   ip::init_eval(eval);
   ip::init_user_model(m);
+  auto da = m.def_submodule("da", "Data assimilation: the Lorenz models and `implicit da`.");
+  ip::init_da(da);
   m.attr("__version__") = implicit::version();
 }
