@@ -44,6 +44,7 @@
 #include "implicit/da/filters.hpp"
 #include "implicit/da/lorenz.hpp"
 #include "implicit/da/model.hpp"
+#include "implicit/da/smoother.hpp"
 #include "implicit/da/twin.hpp"
 #include "implicit/filter/filter_options.hpp"
 #include "implicit/filter/global_localization.hpp"
