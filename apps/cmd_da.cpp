@@ -44,8 +44,9 @@ void setup_da(CLI::App& sub) {
   sub.add_option("--forcing", s.forcing, "Lorenz-96 forcing F")
       ->check(in_range(-1e6, 1e6))
       ->capture_default_str();
-  sub.add_option("--method", s.method, "bootstrap, implicit (particle filters), enkf or etkf")
-      ->check(CLI::IsMember({"bootstrap", "implicit", "enkf", "etkf"}))
+  sub.add_option("--method", s.method,
+                 "bootstrap, implicit (particle filters), enkf, etkf or implicit-smoother")
+      ->check(CLI::IsMember({"bootstrap", "implicit", "enkf", "etkf", "implicit-smoother"}))
       ->capture_default_str();
   sub.add_option("-N,--members", s.members, "Ensemble members / particles N")
       ->check(in_range(2, 10000000))
@@ -66,7 +67,7 @@ void setup_da(CLI::App& sub) {
       ->capture_default_str();
   sub.add_option("--inflation", s.inflation,
                  "Multiplicative inflation of the forecast anomalies "
-                 "(enkf, etkf)")
+                 "(enkf, etkf) or of the background's (implicit-smoother)")
       ->check(in_range(1.0, 1e3))
       ->capture_default_str();
   sub.add_option("--resample-threshold", s.resample_threshold,
@@ -76,14 +77,18 @@ void setup_da(CLI::App& sub) {
   sub.add_option("--map", s.map, "Implicit filter's map: linear or random")
       ->check(CLI::IsMember({"linear", "random"}))
       ->capture_default_str();
+  sub.add_option("--lag", s.lag,
+                 "implicit-smoother: window length L in observation cycles (default 3; refused "
+                 "with the filters)")
+      ->check(in_range(1, 1000));
   sub.add_option("--cycles", s.cycles, "Observation cycles (0: the setting's, 1000 or 1280)")
       ->check(in_range(0, 100000000))
       ->capture_default_str();
   add_common_options(sub, cmd->ctx);
-  set_examples(sub,
-               {"implicit da --model lorenz63 --method etkf -N 10 --seeds 10",
-                "implicit da --method bootstrap -N 800 --jitter 0.3 --json",
-                "implicit da --model lorenz96 --dim 10 --method implicit -N 100 --jitter 0.2"});
+  set_examples(sub, {"implicit da --model lorenz63 --method etkf -N 10 --seeds 10",
+                     "implicit da --method bootstrap -N 800 --jitter 0.3 --json",
+                     "implicit da --model lorenz96 --dim 10 --method implicit -N 100 --jitter 0.2",
+                     "implicit da --method implicit-smoother -N 30 --lag 3"});
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     const auto r = experiments::run_da(cmd->settings, cmd->ctx);
@@ -95,7 +100,9 @@ void setup_da(CLI::App& sub) {
 }
 
 const Registrar register_da{
-    "da", "Data assimilation: particle filters, EnKF and ETKF on Lorenz-63/96", setup_da};
+    "da",
+    "Data assimilation: particle filters, EnKF, ETKF and the implicit smoother on Lorenz-63/96",
+    setup_da};
 
 }  // namespace
 }  // namespace implicit::app

@@ -87,6 +87,23 @@ da::FilterOptions filter_options(const DaSettings& s, std::uint64_t seed) {
   return o;
 }
 
+bool is_smoother(const DaSettings& s) { return s.method == "implicit-smoother"; }
+
+da::SmootherOptions smoother_options(const DaSettings& s, std::uint64_t seed) {
+  da::SmootherOptions o;
+  o.members = s.members;
+  o.lag = s.lag == 0 ? kDefaultLag : s.lag;
+  o.inflation = s.inflation;
+  o.seed = seed;
+  return o;
+}
+
+/// One seed's twin experiment with the filter or the smoother the settings name.
+da::TwinResult run_one(const DaSettings& s, const DaSetup& d, std::uint64_t seed) {
+  if (is_smoother(s)) return da::run_twin(d.problem, smoother_options(s, seed), d.twin);
+  return da::run_twin(d.problem, filter_options(s, seed), d.twin);
+}
+
 }  // namespace
 
 DaSetup da_setup(const DaSettings& s, std::uint64_t seed) {
@@ -110,8 +127,19 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
   // Every setting and option is checked before any run starts (a refusal costs no work).
   {
     const DaSetup d = da_setup(s, ctx.seed);
-    da::EnsembleFilter check(d.problem, filter_options(s, ctx.seed));
-    (void)check;
+    if (is_smoother(s)) {
+      require(s.lag >= 0, "da: expected a lag L >= 1 (0: the default {}), got {}", kDefaultLag,
+              s.lag);
+      da::ImplicitSmoother check(d.problem, smoother_options(s, ctx.seed));
+      (void)check;
+    } else {
+      require(s.lag == 0,
+              "da: --lag is the window length of the implicit smoother; method {} has no window "
+              "(got lag {})",
+              s.method, s.lag);
+      da::EnsembleFilter check(d.problem, filter_options(s, ctx.seed));
+      (void)check;
+    }
   }
   const auto runs = static_cast<std::size_t>(s.seeds);
   std::vector<da::TwinResult> results(runs);
@@ -124,7 +152,7 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
         bar.check();  // the bar ticks per seed: after the hook has thrown, no run starts
         const std::uint64_t seed = ctx.seed + r;
         const DaSetup d = da_setup(s, seed);
-        results[r] = da::run_twin(d.problem, filter_options(s, seed), d.twin);
+        results[r] = run_one(s, d, seed);
         bar.tick();
       },
       1);
@@ -167,6 +195,7 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
       {"inflation", s.inflation},
       {"resample_threshold", s.resample_threshold},
       {"map", s.map},
+      {"lag", is_smoother(s) ? nlohmann::json(smoother_options(s, ctx.seed).lag) : nullptr},
       {"cycles", d.twin.cycles},
       {"burn_in", d.twin.burn_in},
       {"rmse_a", {{"mean", mean}, {"sd", sd}, {"ci95", ci}}},

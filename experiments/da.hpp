@@ -19,7 +19,7 @@ struct DaSettings {
   std::string model = "lorenz63";  ///< lorenz63 (sakov2012) or lorenz96 (bocquet2010)
   int dim = 10;                    ///< Lorenz-96 dimension (>= 4)
   double forcing = 8.0;            ///< Lorenz-96 forcing F
-  std::string method = "etkf";     ///< bootstrap, implicit, enkf or etkf
+  std::string method = "etkf";     ///< bootstrap, implicit, enkf, etkf or implicit-smoother
   int members = 10;
   int seeds = 10;  ///< independent runs: seeds ctx.seed, ctx.seed + 1, ...
   double jitter = 0.0;
@@ -28,7 +28,11 @@ struct DaSettings {
   double resample_threshold = 0.5;
   std::string map = "linear";  ///< implicit filter: linear or random map
   int cycles = 0;              ///< observation cycles; 0: the setting's own (1000 or 1280)
+  int lag = 0;  ///< implicit-smoother: window length L in cycles (0: kDefaultLag); others: 0
 };
+
+/// The implicit smoother's window length when --lag is not given.
+inline constexpr int kDefaultLag = 3;
 
 /// The problem and twin settings of a benchmark setting for `seed` (the Lorenz-96 truth starts
 /// from a state spun up from F + N(0, 1) noise drawn with the seed). Throws InvalidArgument for
@@ -41,9 +45,9 @@ struct DaSetup {
 DaSetup da_setup(const DaSettings& s, std::uint64_t seed);
 
 /// Keys: model, setting, dim, method, members, seeds, seed, jitter, regularisation, inflation,
-/// resample_threshold, map, cycles, burn_in, rmse_a {mean, sd, ci95 [lo, hi]}, spread_a,
-/// mean_ess, ms_per_cycle, resamplings_per_run, sampling_failures, runs [{seed, rmse_a,
-/// spread_a, mean_ess, ms_per_cycle}], threads, seconds.
+/// resample_threshold, map, lag (implicit-smoother; null otherwise), cycles, burn_in, rmse_a {mean,
+/// sd, ci95 [lo, hi]}, spread_a, mean_ess, ms_per_cycle, resamplings_per_run, sampling_failures,
+/// runs [{seed, rmse_a, spread_a, mean_ess, ms_per_cycle}], threads, seconds.
 nlohmann::json run_da(const DaSettings& s, const RunContext& ctx);
 
 /// The 0.975 quantile of Student's t with `df` degrees of freedom (df >= 1).

@@ -71,6 +71,8 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
          1,
          {"implicit particle filter", "jitter > 0"}},
         {"da --cycles -1", 2, {"--cycles"}},
+        {"da --method implicit-smoother --lag 0", 2, {"--lag"}},
+        {"da --method etkf --lag 2 --cycles 20", 1, {"--lag", "implicit smoother"}},
         {"da --method implicit --cycles 20", 1, {"implicit particle filter", "jitter > 0"}}}},
       {"eval",
        {{"eval", 2, {"--est"}},
