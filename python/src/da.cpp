@@ -85,26 +85,6 @@ experiments::DaSettings da_settings(const py::dict& kw) {
   return s;
 }
 
-/// progress= of run(): the user's progress(done, total) or None, as in runs.cpp. Called from
-/// the runner's workers (serialised by the bar) with the interpreter's lock; it also checks for
-/// Ctrl-C. Its exception is kept, so the caller gets it unchanged rather than what the stopped
-/// run throws after it.
-struct DaProgress {
-  py::object callable;
-  std::exception_ptr error;
-
-  void operator()(std::size_t done, std::size_t total) {
-    py::gil_scoped_acquire locked;
-    try {
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-      if (!callable.is_none()) callable(done, total);
-    } catch (...) {
-      error = std::current_exception();
-      throw;
-    }
-  }
-};
-
 std::string run_da(const py::dict& kw, const py::object& seed, const py::object& threads,
                    const py::object& progress) {
   // Checked in the order of the signature's keywords, then seed, threads and progress.
@@ -114,7 +94,7 @@ std::string run_da(const py::dict& kw, const py::object& seed, const py::object&
   require(progress.is_none() || PyCallable_Check(progress.ptr()) != 0,
           "progress: expected a callable progress(done, total) or None, got {}",
           type_name(progress));
-  auto state = std::make_shared<DaProgress>();
+  auto state = std::make_shared<PythonProgress>();
   state->callable = progress;
   ctx.progress = [state](std::size_t done, std::size_t total) { (*state)(done, total); };
   nlohmann::json j;

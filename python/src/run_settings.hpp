@@ -5,6 +5,7 @@
 // refuses is refused here too, as InvalidArgument (ValueError) naming the keyword and the range,
 // before a run starts.
 #include <cstdint>
+#include <exception>
 #include <span>
 #include <string>
 
@@ -14,6 +15,26 @@
 #include "experiments/run_context.hpp"
 
 namespace implicit::python {
+
+/// progress= of mcl.run, slam.run and da.run: the user's progress(done, total), or None. The hook
+/// also checks for Ctrl-C (only the main thread sees signals; it runs tasks too). Calls come from
+/// the run's workers, serialised by the bar (run_context.hpp); the interpreter's lock is taken
+/// for each.
+struct PythonProgress {
+  py::object callable;
+  std::exception_ptr error;  ///< the callback's exception (or Ctrl-C's), as raised
+
+  void operator()(std::size_t done, std::size_t total) {
+    py::gil_scoped_acquire locked;
+    try {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      if (!callable.is_none()) callable(done, total);
+    } catch (...) {
+      error = std::current_exception();
+      throw;
+    }
+  }
+};
 
 /// One numeric setting: the Python keyword, the tool's flag and the range of its CLI11 check
 /// (in_range(lo, hi)); `count` > 0 for a list of that many values (each in the range).

@@ -31,26 +31,6 @@ std::string run_json(const Settings& s, const experiments::RunContext& ctx, Run 
   return j.dump();
 }
 
-/// progress= of mcl.run and slam.run: the user's progress(done, total), or None. The hook also
-/// checks for Ctrl-C (only the main thread sees signals; it runs tasks too). Calls come from
-/// the run's workers, serialised by the bar (run_context.hpp); the interpreter's lock is taken
-/// for each.
-struct PythonProgress {
-  py::object callable;
-  std::exception_ptr error;  ///< the callback's exception (or Ctrl-C's), as raised
-
-  void operator()(std::size_t done, std::size_t total) {
-    py::gil_scoped_acquire locked;
-    try {
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-      if (!callable.is_none()) callable(done, total);
-    } catch (...) {
-      error = std::current_exception();
-      throw;
-    }
-  }
-};
-
 /// run_json with progress: the experiments catch a failed run's exception and report it as a
 /// message (parallel_runs.hpp), so the callback's own exception is kept here and raised
 /// unchanged in place of whatever the run then throws.
