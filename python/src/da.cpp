@@ -41,6 +41,7 @@ constexpr DaRange kDaRanges[] = {
     {"jitter", "--jitter", 0.0, 1e6, false},
     {"inflation", "--inflation", 1.0, 1e3, false},
     {"resample_threshold", "--resample-threshold", 0.0, 1.0, false},
+    {"lag", "--lag", 1, 1000, true},
     {"cycles", "--cycles", 0, 100000000, true},
     {"threads", "--threads", 0, 1024, true},
 };
@@ -72,8 +73,8 @@ experiments::DaSettings da_settings(const py::dict& kw) {
   s.model = choice_arg(da_setting(kw, "model"), "model", {"lorenz63", "lorenz96"});
   s.dim = da_int(kw, "dim");
   s.forcing = da_number(kw, "forcing");
-  s.method =
-      choice_arg(da_setting(kw, "method"), "method", {"bootstrap", "implicit", "enkf", "etkf"});
+  s.method = choice_arg(da_setting(kw, "method"), "method",
+                        {"bootstrap", "implicit", "enkf", "etkf", "implicit-smoother"});
   s.members = da_int(kw, "members");
   s.seeds = da_int(kw, "seeds");
   s.jitter = da_number(kw, "jitter");
@@ -81,6 +82,9 @@ experiments::DaSettings da_settings(const py::dict& kw) {
   s.inflation = da_number(kw, "inflation");
   s.resample_threshold = da_number(kw, "resample_threshold");
   s.map = choice_arg(da_setting(kw, "map"), "map", {"linear", "random"});
+  // None: the smoother's default window (the tool without --lag); the runner refuses a lag
+  // with the filters, as the tool does.
+  s.lag = da_setting(kw, "lag").is_none() ? 0 : da_int(kw, "lag");
   s.cycles = da_int(kw, "cycles");
   return s;
 }

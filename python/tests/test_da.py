@@ -30,6 +30,9 @@ def without_timing(r):
     (dict(model="lorenz96", method="etkf", members=10, inflation=1.05, dim=12, cycles=420),
      ["--model", "lorenz96", "--method", "etkf", "-N", "10", "--inflation", "1.05", "--dim", "12",
       "--cycles", "420"]),
+    (dict(model="lorenz63", method="implicit-smoother", members=20, lag=2, cycles=30),
+     ["--model", "lorenz63", "--method", "implicit-smoother", "-N", "20", "--lag", "2",
+      "--cycles", "30"]),
 ])
 def test_run_equals_the_cli_json(cli, kw, flags):
     py = implicit.da.run(seeds=2, seed=7, **kw)

@@ -19,8 +19,14 @@ BAD = [
     # run(): the ranges and choices of `implicit da`'s flags
     (run(model="lorenz84"), r"^model: expected 'lorenz63' or 'lorenz96', got 'lorenz84'$"),
     (run(model=63), r"^model: expected 'lorenz63' or 'lorenz96', got int$"),
-    (run(method="kalman"), r"^method: expected 'bootstrap', 'implicit', 'enkf' or 'etkf', "
-     r"got 'kalman'$"),
+    (run(method="kalman"), r"^method: expected 'bootstrap', 'implicit', 'enkf', 'etkf' or "
+     r"'implicit-smoother', got 'kalman'$"),
+    (run(method="implicit-smoother", lag=0), r"^lag: expected an integer in \[1, 1000\], got 0$"),
+    (run(method="implicit-smoother", lag=1001),
+     r"^lag: expected an integer in \[1, 1000\], got 1001$"),
+    (run(method="implicit-smoother", lag=2.0),
+     r"^lag: expected an integer in \[1, 1000\], got float$"),
+    (run(method="etkf", lag=2), r"--lag is the window length of the implicit smoother"),
     (run(method=None), r"^method: expected .* got NoneType$"),
     (run(members=1), r"^members: expected an integer in \[2, 10000000\], got 1$"),
     (run(members=10**7 + 1), r"^members: expected an integer in \[2, 10000000\], got 10000001$"),
