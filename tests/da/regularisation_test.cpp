@@ -90,8 +90,8 @@ TEST(Regularisation, WeightedCovarianceMatchesTheDefinition) {
 }
 
 // A bootstrap cycle with R = 1e6 I leaves the weights equal to 1/N within a relative ~1e-6: N_eff
-// falls short of N by a relative ~1e-12 (so threshold 1 resamples; with R = 1e12 I it would round to
-// N and nothing would be resampled), and systematic resampling keeps every member exactly once
+// falls short of N by a relative ~1e-12 (so threshold 1 resamples; with R = 1e12 I it would round
+// to N and nothing would be resampled), and systematic resampling keeps every member exactly once
 // unless the cumulative weight's drift from j/N (~1e-6 sqrt(N), under 1e-4) straddles the uniform.
 // The population is then regularised: the members are f_j + e_j, f_j = A x_j, e_j = s L xi_j with
 // s = jitter h and L L^T = C, the covariance of the f_j. Conditional on the f_j (centred, 1/N
@@ -107,11 +107,11 @@ TEST(Regularisation, CovarianceRegularisedEnsembleHasInflatedCovariance) {
   const double jitter = 2.0;
   const MatrixXd x = gaussian_members(count, reg_cov(), 5);
   EnsembleFilter f(reg_problem(1e6), {.method = Method::kBootstrap,
-                                       .members = count,
-                                       .jitter = jitter,
-                                       .regularisation = Regularisation::kCovariance,
-                                       .resample_threshold = 1.0,
-                                       .seed = 9});
+                                      .members = count,
+                                      .jitter = jitter,
+                                      .regularisation = Regularisation::kCovariance,
+                                      .resample_threshold = 1.0,
+                                      .seed = 9});
   f.initialize(x);
   const auto& a = f.assimilate(VectorXd{{0.3, -0.4}});
   ASSERT_TRUE(a.resampled);
