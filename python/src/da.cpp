@@ -95,22 +95,11 @@ std::string run_da(const py::dict& kw, const py::object& seed, const py::object&
   const experiments::DaSettings s = da_settings(kw);
   // seed and threads as the tool's --seed and --threads (run_settings.cpp); no CSV files.
   experiments::RunContext ctx = run_context(seed, py::none(), threads);
-  require(progress.is_none() || PyCallable_Check(progress.ptr()) != 0,
-          "progress: expected a callable progress(done, total) or None, got {}",
-          type_name(progress));
-  auto state = std::make_shared<PythonProgress>();
-  state->callable = progress;
-  ctx.progress = [state](std::size_t done, std::size_t total) { (*state)(done, total); };
-  nlohmann::json j;
-  try {
+  return with_python_progress(ctx, progress, [&] {
     py::gil_scoped_release unlocked;
     ThreadLimit limit(ctx.threads);
-    j = experiments::run_da(s, ctx);
-  } catch (...) {
-    if (state->error) std::rethrow_exception(state->error);
-    throw;
-  }
-  return j.dump();
+    return experiments::run_da(s, ctx).dump();
+  });
 }
 
 // ---- the models ------------------------------------------------------------------------------

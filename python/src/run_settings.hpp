@@ -6,6 +6,7 @@
 // before a run starts.
 #include <cstdint>
 #include <exception>
+#include <memory>
 #include <span>
 #include <string>
 
@@ -35,6 +36,26 @@ struct PythonProgress {
     }
   }
 };
+
+/// Runs fn() with `progress` (the user's callable or None, checked first) as ctx's progress hook.
+/// The experiments catch a failed run's exception and report it as a message
+/// (parallel_runs.hpp), so the callback's own exception is kept and raised unchanged in place of
+/// whatever the run then throws.
+template <typename Fn>
+auto with_python_progress(experiments::RunContext& ctx, const py::object& progress, Fn&& fn) {
+  require(progress.is_none() || PyCallable_Check(progress.ptr()) != 0,
+          "progress: expected a callable progress(done, total) or None, got {}",
+          type_name(progress));
+  auto state = std::make_shared<PythonProgress>();
+  state->callable = progress;
+  ctx.progress = [state](std::size_t done, std::size_t total) { (*state)(done, total); };
+  try {
+    return fn();
+  } catch (...) {
+    if (state->error) std::rethrow_exception(state->error);
+    throw;
+  }
+}
 
 /// One numeric setting: the Python keyword, the tool's flag and the range of its CLI11 check
 /// (in_range(lo, hi)); `count` > 0 for a list of that many values (each in the range).

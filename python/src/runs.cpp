@@ -31,24 +31,11 @@ std::string run_json(const Settings& s, const experiments::RunContext& ctx, Run 
   return j.dump();
 }
 
-/// run_json with progress: the experiments catch a failed run's exception and report it as a
-/// message (parallel_runs.hpp), so the callback's own exception is kept here and raised
-/// unchanged in place of whatever the run then throws.
+/// run_json with progress (run_settings.hpp).
 template <typename Settings, typename Run>
 std::string run_json(const Settings& s, experiments::RunContext ctx, const py::object& progress,
                      Run run) {
-  require(progress.is_none() || PyCallable_Check(progress.ptr()) != 0,
-          "progress: expected a callable progress(done, total) or None, got {}",
-          type_name(progress));
-  auto state = std::make_shared<PythonProgress>();
-  state->callable = progress;
-  ctx.progress = [state](std::size_t done, std::size_t total) { (*state)(done, total); };
-  try {
-    return run_json(s, ctx, run);
-  } catch (...) {
-    if (state->error) std::rethrow_exception(state->error);
-    throw;
-  }
+  return with_python_progress(ctx, progress, [&] { return run_json(s, ctx, run); });
 }
 
 }  // namespace
