@@ -20,22 +20,12 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double log_det_lower(const Eigen::MatrixXd& lower) { return lower.diagonal().array().log().sum(); }
 
-/// The lower Cholesky factor of `cov`; a covariance that is not numerically positive definite
-/// (members collapsed onto a subspace) gets a ridge eps I, eps = 1e-10 of its mean variance
-/// (1e-12 if that is 0), multiplied by 10 until the factor exists.
+/// The lower Cholesky factor of `cov`, with filters.hpp's ridge when the members collapsed onto
+/// a subspace; a non-finite covariance is refused in the smoother's words.
 void factor_background(const Eigen::MatrixXd& cov, Eigen::MatrixXd& lower) {
   require(cov.allFinite(),
           "implicit smoother: the background covariance of the members is not finite");
-  const Eigen::Index n = cov.rows();
-  Eigen::LLT<Eigen::MatrixXd> llt(cov);
-  if (llt.info() != Eigen::Success) {
-    const double scale = cov.trace() / static_cast<double>(n);
-    for (double ridge = scale > 0.0 ? 1e-10 * scale : 1e-12;; ridge *= 10.0) {
-      llt.compute(cov + ridge * Eigen::MatrixXd::Identity(n, n));
-      if (llt.info() == Eigen::Success) break;
-    }
-  }
-  lower = llt.matrixL();
+  covariance_factor(cov, lower);
 }
 
 }  // namespace
