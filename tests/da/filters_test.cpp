@@ -17,6 +17,7 @@
 #include "implicit/core/rng.hpp"
 #include "implicit/da/filters.hpp"
 #include "implicit/da/twin.hpp"
+#include "refusal.hpp"
 
 namespace implicit::da {
 namespace {
@@ -277,14 +278,7 @@ TEST(TwinExperiment, SameSeedSameNumbersForAnyThreadCount) {
   }
 }
 
-void expect_refused(const std::function<void()>& f, const std::string& words) {
-  try {
-    f();
-    ADD_FAILURE() << "expected InvalidArgument mentioning '" << words << "'";
-  } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
-  }
-}
+using implicit::test_support::expect_refused;
 
 TEST(EnsembleFilter, RefusesBadInput) {
   const Problem p = linear_problem(true);

@@ -16,6 +16,7 @@
 #include "implicit/core/rng.hpp"
 #include "implicit/da/filters.hpp"
 #include "implicit/da/twin.hpp"
+#include "refusal.hpp"
 
 namespace implicit::da {
 namespace {
@@ -157,35 +158,27 @@ TEST(Regularisation, SameSeedSameNumbersForAnyThreadCount) {
   }
 }
 
-void expect_refused_with(const std::function<void()>& f, const std::string& words) {
-  try {
-    f();
-    ADD_FAILURE() << "expected InvalidArgument mentioning '" << words << "'";
-  } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
-  }
-}
+using implicit::test_support::expect_refused;
 
 TEST(Regularisation, RefusesBadInput) {
   const Problem p = reg_problem(0.5);
   const auto cov = Regularisation::kCovariance;
-  expect_refused_with([&] { EnsembleFilter(p, {.jitter = -0.1, .regularisation = cov}); },
-                      "jitter std >= 0, got -0.1");
-  expect_refused_with(
-      [&] { EnsembleFilter(p, {.method = Method::kImplicit, .regularisation = cov}); },
-      "expected a jitter > 0");
-  expect_refused_with([] { parse_regularisation("shrink"); }, "expected iso or cov, got 'shrink'");
+  expect_refused([&] { EnsembleFilter(p, {.jitter = -0.1, .regularisation = cov}); },
+                 "jitter std >= 0, got -0.1");
+  expect_refused([&] { EnsembleFilter(p, {.method = Method::kImplicit, .regularisation = cov}); },
+                 "expected a jitter > 0");
+  expect_refused([] { parse_regularisation("shrink"); }, "expected iso or cov, got 'shrink'");
   EXPECT_EQ(parse_regularisation("cov"), cov);
-  expect_refused_with([] { silverman_bandwidth(0, 3); }, "N >= 1");
+  expect_refused([] { silverman_bandwidth(0, 3); }, "N >= 1");
   MatrixXd c;
-  expect_refused_with(
+  expect_refused(
       [&] {
         weighted_covariance(std::vector<VectorXd>{VectorXd::Zero(2)}, std::vector<double>{}, c);
       },
       "one weight per member");
   MatrixXd l;
-  expect_refused_with([&] { covariance_factor(MatrixXd::Constant(2, 2, std::nan("")), l); },
-                      "not finite");
+  expect_refused([&] { covariance_factor(MatrixXd::Constant(2, 2, std::nan("")), l); },
+                 "not finite");
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "implicit/core/error.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/filter/pose_clusters.hpp"
+#include "refusal.hpp"
 
 namespace implicit::filter {
 namespace {
@@ -91,14 +92,7 @@ TEST(PoseClusters, NeighbouringCellsChainAndAnEmptyCellSplits) {
   EXPECT_DOUBLE_EQ(c.mean(0), 0.2);
 }
 
-void expect_refused(const std::function<void()>& f, const std::string& words) {
-  try {
-    f();
-    ADD_FAILURE() << "expected InvalidArgument mentioning '" << words << "'";
-  } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
-  }
-}
+using implicit::test_support::expect_refused;
 
 TEST(PoseClusters, RefusesBadInputByName) {
   const std::vector<Pose> one = {Pose(0, 0, 0)};
