@@ -16,7 +16,7 @@ struct DaCommand {
   RunContext ctx;
 };
 
-void print_text(const nlohmann::json& r) {
+void print_da_text(const nlohmann::json& r) {
   fmt::print("{} ({}, n = {}), {} N = {}, {} seeds from {}\n", r["model"].get<std::string>(),
              r["setting"].get<std::string>(), r["dim"].get<int>(), r["method"].get<std::string>(),
              r["members"].get<int>(), r["seeds"].get<int>(), r["seed"].get<std::uint64_t>());
@@ -95,7 +95,7 @@ void setup_da(CLI::App& sub) {
     if (cmd->ctx.json)
       print_json(r);
     else
-      print_text(r);
+      print_da_text(r);
   });
 }
 

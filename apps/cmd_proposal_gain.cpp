@@ -18,7 +18,7 @@ struct ProposalGainCommand {
   RunContext ctx;
 };
 
-void print_text(const nlohmann::json& r) {
+void print_gain_text(const nlohmann::json& r) {
   fmt::print("implicit vs bootstrap MCL, M = {}, {} of {} s per point\n", r["particles"].get<int>(),
              counted(r["runs"].get<int>(), "simulated log", "simulated logs"),
              r["duration_s"].get<double>());
@@ -79,7 +79,7 @@ void setup_proposal_gain(CLI::App& sub) {
     if (cmd->ctx.json)
       print_json(r);
     else
-      print_text(r);
+      print_gain_text(r);
   });
 }
 

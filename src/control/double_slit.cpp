@@ -13,7 +13,6 @@
 namespace implicit::control {
 
 namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
 // Central-difference step of the FD-CRN control (spec §2.4.5).
 constexpr double kFdStep = 1e-3;
 
@@ -95,7 +94,7 @@ double DoubleSlit::exact_log_psi(double x, double t) const {
   const double base = 0.5 * std::log(gamma_ / spread) - x * x / (2.0 * spread);
   const double eps = 1e-12 * std::max(1.0, t1);
   if (t > t1 + eps) return base;
-  if (t >= t1 - eps) return in_slits(x) ? base : -kInf;
+  if (t >= t1 - eps) return in_slits(x) ? base : -kInfinity;
   const double v = s * (t1 - t), c = gamma_ + s * (tf - t1);
   const double m = x * c / (v + c), tau = std::sqrt(v * c / (v + c));
   std::array<double, 2> lp{};
@@ -244,7 +243,7 @@ void DoubleSlit::path_weights(double x, int k, int s, double edge, const Eigen::
         pass ? implicit_log_weight(n, xi.col(j).squaredNorm(), path_function(x, y),
                                    chol.log_det_L()) -
                    log_path_norm
-             : -kInf;
+             : -kInfinity;
   }
 }
 
@@ -255,7 +254,7 @@ double DoubleSlit::combine(const std::vector<double>& lw0, const std::vector<dou
     const auto& lw = dominant == 0 ? lw0 : lw1;
     int pass = 0;
     for (double l : lw) pass += std::isfinite(l) ? 1 : 0;
-    if (pass == 0) return -kInf;
+    if (pass == 0) return -kInfinity;
     return -phi_dominant - log_normalizer(k) + std::log(static_cast<double>(pass) / M);
   }
   // W2: psi_hat = sum over slits of the mean weight of that slit's M samples.
@@ -281,7 +280,7 @@ double DoubleSlit::log_psi_from_offsets(double x, int k, std::span<const double>
     for (std::size_t j = 0; j < d.size(); ++j)
       lw[s][j] = p_.slits[s].contains(mins[s].edge + d[j])
                      ? -log_norm - mins[s].phi - mins[s].nu * d[j]
-                     : -kInf;
+                     : -kInfinity;
   }
   const int dom = mins[0].phi <= mins[1].phi ? 0 : 1;
   return combine(lw[0], lw[1], static_cast<int>(delta0.size()), estimator, dom, mins[dom].phi, k);
@@ -343,7 +342,7 @@ SlitControlEstimate DoubleSlit::estimate_control(double x, int k, int M, SlitEst
         for (int j = 0; j < M; ++j) {
           const double d = delta[s][static_cast<std::size_t>(j)];
           lw[s][static_cast<std::size_t>(j)] =
-              p_.slits[s].contains(mn.edge + d) ? -log_norm - mn.phi - mn.nu * d : -kInf;
+              p_.slits[s].contains(mn.edge + d) ? -log_norm - mn.phi - mn.nu * d : -kInfinity;
         }
       }
     };
@@ -367,7 +366,7 @@ SlitControlEstimate DoubleSlit::estimate_control(double x, int k, int M, SlitEst
   out.log_psi = l0;
   out.samples = estimator == SlitEstimator::kPaper ? M : 2 * M;
   // ESS and pass counts over the samples the estimator uses.
-  double sw = 0.0, sw2 = 0.0, lmax = -kInf;
+  double sw = 0.0, sw2 = 0.0, lmax = -kInfinity;
   for (int s = 0; s < 2; ++s) {
     if (estimator == SlitEstimator::kPaper && s != dom) continue;
     for (double l : lw_0[s]) {
@@ -418,7 +417,7 @@ double DoubleSlit::frozen_wall_limit(double x, int k, int M, const StreamKey& ke
       for (int j = 0; j < M; ++j) {
         const double d = delta[s][static_cast<std::size_t>(j)];
         lw[s][static_cast<std::size_t>(j)] =
-            p_.slits[s].contains(mins[s].edge + d) ? -mins[s].phi - mins[s].nu * d : -kInf;
+            p_.slits[s].contains(mins[s].edge + d) ? -mins[s].phi - mins[s].nu * d : -kInfinity;
       }
     }
   } else {
@@ -428,7 +427,7 @@ double DoubleSlit::frozen_wall_limit(double x, int k, int M, const StreamKey& ke
     for (int s = 0; s < 2; ++s)
       path_weights(x, k, s, mins[s].edge, xi[s], lw[s], &delta[s], nullptr);
   }
-  double lmax = -kInf;
+  double lmax = -kInfinity;
   for (int s = 0; s < 2; ++s)
     for (double l : lw[s]) lmax = std::max(lmax, l);
   require(std::isfinite(lmax), "double slit frozen-wall limit: no sample passed a slit");
@@ -475,7 +474,7 @@ PlainMonteCarloResult DoubleSlit::plain_monte_carlo(double x, int k, int paths, 
       if (i == w && !in_slits(y)) pass = false;
       if (store) (*kept)(i, static_cast<Eigen::Index>(j)) = y;
     }
-    log_w[j] = pass ? -y * y / (2.0 * gamma_) : -kInf;
+    log_w[j] = pass ? -y * y / (2.0 * gamma_) : -kInfinity;
   });
   PlainMonteCarloResult r;
   r.paths = paths;

@@ -21,8 +21,6 @@ namespace {
 constexpr std::uint64_t kJitter = purpose::kProposal;
 constexpr std::uint64_t kPerturbation = purpose::kProposal;
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 /// The parts of the implicit filter's F that all members share in one cycle, with
 /// |y - H x|^2_{R^-1} = x^T G x - 2 b^T x + y^T R^-1 y, so that evaluating F needs no
 /// observation-sized temporaries: F(x) = 1/2 dx^T Q^-1 dx + 1/2 x^T G x - b^T x + c, dx = x - m.
@@ -72,16 +70,16 @@ double implicit_move(const ImplicitTerms<N>& t, Eigen::VectorXd& x, Rng& rng, Im
   const auto r = newton_minimize<DenseFactor<N>>(f, f.m);
   if (!r.factor_ok) {
     failed = true;
-    return -kInf;
+    return -kInfinity;
   }
   Vec<N> xi(x.size()), out(x.size());
   rng.fill_normal(xi);
-  double log_w = -kInf;
+  double log_w = -kInfinity;
   if (map == ImplicitMap::kLinear) {
     log_w = linear_map(f, r.x, r.factor, xi, out);
   } else if (random_map(f, r.x, r.value, r.factor, xi, out, log_w) != RayStatus::kOk) {
     failed = true;
-    return -kInf;
+    return -kInfinity;
   }
   x = out;
   return log_w;

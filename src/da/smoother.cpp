@@ -16,8 +16,6 @@
 namespace implicit::da {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 double log_det_lower(const Eigen::MatrixXd& lower) { return lower.diagonal().array().log().sum(); }
 
 /// The lower Cholesky factor of `cov`, with filters.hpp's ridge when the members collapsed onto
@@ -74,7 +72,7 @@ double WindowObjective::evaluate(const Vector& x0, Vector* grad, Hessian* hess) 
     s.product.noalias() = s.step_jacobian * s.jacobian;
     s.jacobian.swap(s.product);
   }
-  if (!s.state.allFinite()) return kInf;
+  if (!s.state.allFinite()) return kInfinity;
   // Whitened residuals: L_R^-1 (y - H M^l(x0)) and L_B^-1 (x0 - b).
   s.residual = t.y;
   s.residual.noalias() -= p.H * s.state;
@@ -215,7 +213,7 @@ void ImplicitSmoother::minimise() {
   opts.gradient_tolerance = 1e-9;
   opts.step_tolerance = 1e-11;
   const WindowObjective f(problem_, terms_, scratch_[0]);
-  double best = kInf;
+  double best = kInfinity;
   bool found = false;
   for (int s = 0; s < options_.starts; ++s) {
     const Eigen::VectorXd& start = s == 0 ? terms_.b : x0_[order_[static_cast<std::size_t>(s - 1)]];
@@ -259,9 +257,9 @@ void ImplicitSmoother::read_off() {
   int failures = 0;
   double total = 0.0;
   for (std::size_t j = 0; j < log_w_.size(); ++j) {
-    const bool failed = !(log_w_[j] > -kInf);
+    const bool failed = !(log_w_[j] > -kInfinity);
     failures += failed ? 1 : 0;
-    weights_[j] = failed || !(top > -kInf) ? 0.0 : std::exp(log_w_[j] - top);
+    weights_[j] = failed || !(top > -kInfinity) ? 0.0 : std::exp(log_w_[j] - top);
     total += weights_[j];
   }
   if (!(total > 0.0)) {  // every sample failed: keep equal weights (an uninformed analysis)

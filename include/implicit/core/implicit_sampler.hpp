@@ -56,8 +56,6 @@ struct SampleSet {
 };
 
 namespace detail {
-inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
 /// Room for M samples of dimension m; a size the machine cannot hold is bad input, not bad_alloc.
 template <int N>
 void allocate(SampleSet<N>& s, int m, std::size_t M) {
@@ -110,8 +108,8 @@ SampleSet<T::Dim> sample_with(const T& f, const Laplace<T::Dim>& lp, std::size_t
       s.log_weights[j] = linear_map_sample(f, lp, xi, x);
       // F = -inf or NaN at a sample (an unbounded density): weight zero and counted, as the
       // random map does, not a +inf weight that makes the normalisation throw.
-      if (std::isnan(s.log_weights[j]) || s.log_weights[j] == detail::kInfinity) {
-        s.log_weights[j] = -detail::kInfinity;
+      if (std::isnan(s.log_weights[j]) || s.log_weights[j] == kInfinity) {
+        s.log_weights[j] = -kInfinity;
         failed[j] = 1;
       }
     } else {

@@ -1,6 +1,8 @@
 #pragma once
 // Small vocabulary types shared by every layer: fixed- or dynamic-size Eigen vectors and matrices.
 
+#include <limits>
+
 #include <Eigen/Core>
 
 namespace implicit {
@@ -15,5 +17,6 @@ using Mat = Eigen::Matrix<double, N, N>;
 
 inline constexpr double kPi = 3.14159265358979323846;
 inline constexpr double kLog2Pi = 1.83787706640934548356;  // log(2 pi)
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 }  // namespace implicit
