@@ -147,6 +147,22 @@ void weighted_covariance(std::span<const Eigen::VectorXd> members, std::span<con
   cov.triangularView<Eigen::StrictlyUpper>() = cov.transpose();
 }
 
+Eigen::MatrixXd initial_members(const Eigen::VectorXd& mean, const Eigen::MatrixXd& cov, int dim,
+                                int count, std::uint64_t seed, const char* who) {
+  require(mean.size() == dim && mean.allFinite(),
+          "{}: expected a finite initial mean of size {}, got size {}", who, dim, mean.size());
+  require_spd(cov, dim, "initial covariance");
+  const Eigen::MatrixXd l = cov.llt().matrixL();
+  Eigen::MatrixXd members(dim, count);
+  Eigen::VectorXd z(dim);
+  for (int j = 0; j < count; ++j) {
+    Rng rng({seed, 0, static_cast<std::uint64_t>(j), purpose::kInitial});
+    rng.fill_normal(z);
+    members.col(j) = mean + l * z;
+  }
+  return members;
+}
+
 double covariance_factor(const Eigen::MatrixXd& cov, Eigen::MatrixXd& lower) {
   require(cov.allFinite(), "covariance regularisation: the ensemble covariance is not finite");
   const Eigen::Index n = cov.rows();
@@ -205,20 +221,8 @@ EnsembleFilter::EnsembleFilter(Problem problem, FilterOptions options)
 }
 
 void EnsembleFilter::initialize(const Eigen::VectorXd& mean, const Eigen::MatrixXd& cov) {
-  const int n = problem_.dim();
-  require(mean.size() == n && mean.allFinite(),
-          "ensemble filter: expected a finite initial mean of size {}, got size {}", n,
-          mean.size());
-  require_spd(cov, n, "initial covariance");
-  const Eigen::MatrixXd l = cov.llt().matrixL();
-  Eigen::MatrixXd members(n, options_.members);
-  for (int j = 0; j < options_.members; ++j) {
-    Rng rng({options_.seed, 0, static_cast<std::uint64_t>(j), purpose::kInitial});
-    Eigen::VectorXd z(n);
-    rng.fill_normal(z);
-    members.col(j) = mean + l * z;
-  }
-  initialize(members);
+  initialize(initial_members(mean, cov, problem_.dim(), options_.members, options_.seed,
+                             "ensemble filter"));
 }
 
 void EnsembleFilter::initialize(const Eigen::MatrixXd& members) {

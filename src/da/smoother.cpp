@@ -110,20 +110,8 @@ ImplicitSmoother::ImplicitSmoother(Problem problem, SmootherOptions options)
 }
 
 void ImplicitSmoother::initialize(const Eigen::VectorXd& mean, const Eigen::MatrixXd& cov) {
-  const int n = problem_.dim();
-  require(mean.size() == n && mean.allFinite(),
-          "implicit smoother: expected a finite initial mean of size {}, got size {}", n,
-          mean.size());
-  require_spd(cov, n, "initial covariance");
-  const Eigen::MatrixXd l = cov.llt().matrixL();
-  Eigen::MatrixXd members(n, options_.members);
-  Eigen::VectorXd z(n);
-  for (int j = 0; j < options_.members; ++j) {
-    Rng rng({options_.seed, 0, static_cast<std::uint64_t>(j), purpose::kInitial});
-    rng.fill_normal(z);
-    members.col(j) = mean + l * z;
-  }
-  initialize(members);
+  initialize(initial_members(mean, cov, problem_.dim(), options_.members, options_.seed,
+                             "implicit smoother"));
 }
 
 void ImplicitSmoother::initialize(const Eigen::MatrixXd& members) {

@@ -138,6 +138,12 @@ double silverman_bandwidth(int members, int dim);
 void weighted_covariance(std::span<const Eigen::VectorXd> members, std::span<const double> weights,
                          Eigen::MatrixXd& cov);
 
+/// N members drawn from N(mean, cov), member j from the stream (seed, 0, j, kInitial), so each
+/// member's draw is the same for any N and thread count. `who` names the caller in the errors (a
+/// mean of the wrong size or not finite, a covariance not SPD).
+Eigen::MatrixXd initial_members(const Eigen::VectorXd& mean, const Eigen::MatrixXd& cov, int dim,
+                                int count, std::uint64_t seed, const char* who);
+
 /// The lower Cholesky factor of `cov` into `lower`. A covariance that is not numerically positive
 /// definite (members collapsed onto one point or a subspace) gets a ridge eps I added first, eps
 /// = 1e-10 times its mean variance (1e-12 if that is 0), multiplied by 10 until the factor exists:
