@@ -81,6 +81,10 @@ void setup_da(CLI::App& sub) {
                  "implicit-smoother: window length L in observation cycles (default 3; refused "
                  "with the filters)")
       ->check(in_range(1, 1000));
+  sub.add_option("--starts", s.starts,
+                 "implicit-smoother: Newton starts per window, the background and the heaviest "
+                 "members (default 3; refused with the filters)")
+      ->check(in_range(1, 1000));
   sub.add_option("--cycles", s.cycles, "Observation cycles (0: the setting's, 1000 or 1280)")
       ->check(in_range(0, 100000000))
       ->capture_default_str();

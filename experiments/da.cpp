@@ -93,6 +93,7 @@ da::SmootherOptions smoother_options(const DaSettings& s, std::uint64_t seed) {
   da::SmootherOptions o;
   o.members = s.members;
   o.lag = s.lag == 0 ? kDefaultLag : s.lag;
+  o.starts = s.starts == 0 ? kDefaultStarts : s.starts;
   o.inflation = s.inflation;
   o.seed = seed;
   return o;
@@ -130,6 +131,8 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
     if (is_smoother(s)) {
       require(s.lag >= 0, "da: expected a lag L >= 1 (0: the default {}), got {}", kDefaultLag,
               s.lag);
+      require(s.starts >= 0, "da: expected starts >= 1 (0: the default {}), got {}",
+              kDefaultStarts, s.starts);
       da::ImplicitSmoother check(d.problem, smoother_options(s, ctx.seed));
       (void)check;
     } else {
@@ -137,6 +140,10 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
               "da: --lag is the window length of the implicit smoother; method {} has no window "
               "(got lag {})",
               s.method, s.lag);
+      require(s.starts == 0,
+              "da: --starts is the implicit smoother's number of Newton starts; method {} has "
+              "none (got starts {})",
+              s.method, s.starts);
       da::EnsembleFilter check(d.problem, filter_options(s, ctx.seed));
       (void)check;
     }
@@ -196,6 +203,7 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
       {"resample_threshold", s.resample_threshold},
       {"map", s.map},
       {"lag", is_smoother(s) ? nlohmann::json(smoother_options(s, ctx.seed).lag) : nullptr},
+      {"starts", is_smoother(s) ? nlohmann::json(smoother_options(s, ctx.seed).starts) : nullptr},
       {"cycles", d.twin.cycles},
       {"burn_in", d.twin.burn_in},
       {"rmse_a", {{"mean", mean}, {"sd", sd}, {"ci95", ci}}},

@@ -29,10 +29,14 @@ struct DaSettings {
   std::string map = "linear";  ///< implicit filter: linear or random map
   int cycles = 0;              ///< observation cycles; 0: the setting's own (1000 or 1280)
   int lag = 0;  ///< implicit-smoother: window length L in cycles (0: kDefaultLag); others: 0
+  /// implicit-smoother: Newton starts per window (0: kDefaultStarts); others: 0.
+  int starts = 0;
 };
 
 /// The implicit smoother's window length when --lag is not given.
 inline constexpr int kDefaultLag = 3;
+/// The implicit smoother's Newton starts when --starts is not given (da::SmootherOptions).
+inline constexpr int kDefaultStarts = 3;
 
 /// The problem and twin settings of a benchmark setting for `seed` (the Lorenz-96 truth starts
 /// from a state spun up from F + N(0, 1) noise drawn with the seed). Throws InvalidArgument for
@@ -45,7 +49,7 @@ struct DaSetup {
 DaSetup da_setup(const DaSettings& s, std::uint64_t seed);
 
 /// Keys: model, setting, dim, method, members, seeds, seed, jitter, regularisation, inflation,
-/// resample_threshold, map, lag (implicit-smoother; null otherwise), cycles, burn_in, rmse_a {mean,
+/// resample_threshold, map, lag and starts (implicit-smoother; null otherwise), cycles, burn_in, rmse_a {mean,
 /// sd, ci95 [lo, hi]}, spread_a, mean_ess, ms_per_cycle, resamplings_per_run, sampling_failures,
 /// runs [{seed, rmse_a, spread_a, mean_ess, ms_per_cycle}], threads, seconds.
 nlohmann::json run_da(const DaSettings& s, const RunContext& ctx);

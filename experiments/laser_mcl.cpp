@@ -14,9 +14,11 @@
 
 #include "experiments/laser_global.hpp"
 #include "implicit/core/error.hpp"
+#include "implicit/core/newton.hpp"
 #include "implicit/core/weights.hpp"
 #include "implicit/filter/monte_carlo_localization.hpp"
 #include "implicit/filter/pose_clusters.hpp"
+#include "implicit/filter/pose_objective.hpp"
 #include "implicit/robot/distance_field.hpp"
 
 namespace implicit::experiments {
@@ -91,6 +93,8 @@ struct Track {
   int fallbacks = 0, failures = 0;
   double cpu_seconds = 0.0;
   std::size_t updates = 0;
+  double first_fit_reference = std::numeric_limits<double>::quiet_NaN();
+  double first_fit_best = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Runs one filter over updates [first, last] (the filter starts at update `first`, already
@@ -133,6 +137,35 @@ GlobalStart start_anywhere(const LaserMclSettings& s, const LaserDataset& d, con
   }
 }
 
+/// log p(z | x) at the scan-matched pose nearest `reference` (Newton on -log p(z | x) with the
+/// global start's weak pull towards it, for a differentiable model; else at `reference`).
+template <typename Model>
+double fit_near(const Model& model, const typename Model::Prepared& z,
+                const robot::Pose& reference) {
+  if constexpr (std::is_same_v<Model, robot::LikelihoodFieldModel>) {
+    if (model.differentiable()) {
+      filter::PoseObjective<robot::LikelihoodFieldModel> f;
+      f.reset(model, z, reference, robot::Mat3::Identity() / (0.5 * 0.5), 0.0);
+      const auto r = newton_minimize<SmallFactor<3>>(f, reference, filter::scan_newton_options());
+      if (r.x.allFinite())
+        return std::max(model.log_likelihood(z, r.x), model.log_likelihood(z, reference));
+    }
+  }
+  return model.log_likelihood(z, reference);
+}
+
+/// The first scan's fit at the reference and at the start's best particle (LaserMclRun).
+template <typename Model>
+void score_first_scan(const Model& model, const LaserDataset& d, std::size_t first,
+                      const GlobalStart& g, Track& t) {
+  if (!d.reference[first].allFinite()) return;
+  const auto z = model.prepare(d.scans[first], "the global start's scan");
+  t.first_fit_reference = fit_near(model, z, d.reference[first]);
+  double best = -std::numeric_limits<double>::infinity();
+  for (const robot::Pose& x : g.particles) best = std::max(best, model.log_likelihood(z, x));
+  t.first_fit_best = best;
+}
+
 template <typename Model, typename Proposal>
 Track run_one(const LaserMclSettings& s, const LaserDataset& d, const Model& model,
               const std::shared_ptr<const FreeSpace>& space, Proposal proposal, std::uint64_t seed,
@@ -162,6 +195,7 @@ Track run_one(const LaserMclSettings& s, const LaserDataset& d, const Model& mod
   } else {
     const GlobalStart g = start_anywhere(s, d, model, *space, first, seed);
     pf.initialize(g.particles, g.log_weights);
+    score_first_scan(model, d, first, g, t);
     t.estimates.push_back(estimate_of(pf, s.estimate));
   }
   t.ess_fraction.push_back(1.0);
@@ -215,6 +249,8 @@ LaserMclRun score(const LaserMclSettings& s, const LaserDataset& d, const Track&
   r.cpu_us_per_update = t.updates ? 1e6 * t.cpu_seconds / static_cast<double>(t.updates) : 0.0;
   r.fallbacks = t.fallbacks;
   r.failures = t.failures;
+  r.first_scan_fit_reference = t.first_fit_reference;
+  r.first_scan_fit_best = t.first_fit_best;
   if (s.keep_tracks) r.estimates = t.estimates;
   return r;
 }
@@ -411,6 +447,8 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
     if (s.start == StartKind::kGlobal) {
       x["global_success"] = run.global_success;
       x["updates_to_converge"] = run.updates_to_converge;
+      x["first_scan_fit_reference"] = run.first_scan_fit_reference;
+      x["first_scan_fit_best"] = run.first_scan_fit_best;
     }
     if (include_tracks) {
       nlohmann::json est = nlohmann::json::array();

@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -161,8 +162,15 @@ struct LaserMclRun {
   double final_error_m = 0.0;  ///< at the last scored update
   int scored_updates = 0;      ///< updates with a reference (truth); the metrics are NaN if 0
   bool lost = false;
-  bool global_success = false;     ///< global start only
-  int updates_to_converge = -1;    ///< global start: first update from which the error stays small
+  bool global_success = false;   ///< global start only
+  int updates_to_converge = -1;  ///< global start: first update from which the error stays small
+  /// Global start: how well the first scan fits the reference and the best place the start
+  /// found, log p(z | x) at the scan-matched pose nearest the reference (Newton from it, for a
+  /// differentiable model; else at the reference) and the largest over the start's particles.
+  /// A start whose best place fits better than the reference by several nats fails for want of
+  /// evidence, not of particles. NaN where the log has no reference.
+  double first_scan_fit_reference = std::numeric_limits<double>::quiet_NaN();
+  double first_scan_fit_best = std::numeric_limits<double>::quiet_NaN();
   double ess_fraction_mean = 0.0;  ///< mean ESS / M at updates
   double particles_mean = 0.0;
   double cpu_us_per_update = 0.0;  ///< process CPU time per update [us]

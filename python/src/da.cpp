@@ -42,6 +42,7 @@ constexpr DaRange kDaRanges[] = {
     {"inflation", "--inflation", 1.0, 1e3, false},
     {"resample_threshold", "--resample-threshold", 0.0, 1.0, false},
     {"lag", "--lag", 1, 1000, true},
+    {"starts", "--starts", 1, 1000, true},
     {"cycles", "--cycles", 0, 100000000, true},
     {"threads", "--threads", 0, 1024, true},
 };
@@ -85,6 +86,7 @@ experiments::DaSettings da_settings(const py::dict& kw) {
   // None: the smoother's default window (the tool without --lag); the runner refuses a lag
   // with the filters, as the tool does.
   s.lag = da_setting(kw, "lag").is_none() ? 0 : da_int(kw, "lag");
+  s.starts = da_setting(kw, "starts").is_none() ? 0 : da_int(kw, "starts");
   s.cycles = da_int(kw, "cycles");
   return s;
 }

@@ -33,6 +33,9 @@ def without_timing(r):
     (dict(model="lorenz63", method="implicit-smoother", members=20, lag=2, cycles=30),
      ["--model", "lorenz63", "--method", "implicit-smoother", "-N", "20", "--lag", "2",
       "--cycles", "30"]),
+    (dict(model="lorenz63", method="implicit-smoother", members=12, starts=1, cycles=30),
+     ["--model", "lorenz63", "--method", "implicit-smoother", "-N", "12", "--starts", "1",
+      "--cycles", "30"]),
 ])
 def test_run_equals_the_cli_json(cli, kw, flags):
     py = implicit.da.run(seeds=2, seed=7, **kw)
@@ -41,6 +44,8 @@ def test_run_equals_the_cli_json(cli, kw, flags):
     assert set(py) == set(tool)
     assert without_timing(py) == without_timing(tool)  # floats compared exactly
     assert py["seeds"] == 2 and len(py["runs"]) == 2 and py["cycles"] == kw["cycles"]
+    smoother = kw["method"] == "implicit-smoother"
+    assert py["starts"] == (kw.get("starts", 3) if smoother else None)
 
 
 def test_run_does_not_depend_on_threads_or_progress():

@@ -187,3 +187,35 @@ TEST(LaserMclCli, BeamModelKldAndRecoveryRunAndSayHowInTheJson) {
 }
 
 }  // namespace
+
+namespace {
+
+// A global start reports how well its first scan fits the reference and the best place it found
+// (both log-likelihoods, finite on a log with a reference, the same for any thread count); a
+// tracking run has no such keys.
+TEST(LaserMclCli, GlobalStartsReportTheFirstScansFit) {
+  const std::string global = "mcl --sensor laser --quiet --runs 2 -M 200 --max-updates 12 --data " +
+                             kAces + " --init global --global-updates 3 --json";
+  const auto one = run_cli(global + " --threads 1");
+  ASSERT_EQ(one.code, 0) << one.err;
+  const auto two = run_cli(global + " --threads 2");
+  ASSERT_EQ(two.code, 0) << two.err;
+  const auto j = nlohmann::json::parse(one.out), k = nlohmann::json::parse(two.out);
+  ASSERT_EQ(j["per_run"].size(), 2u);
+  for (std::size_t r = 0; r < 2; ++r) {
+    const auto& run = j["per_run"][r];
+    for (const char* key : {"global_success", "updates_to_converge", "first_scan_fit_reference",
+                            "first_scan_fit_best"})
+      ASSERT_TRUE(run.contains(key)) << key;
+    const double ref = run["first_scan_fit_reference"].get<double>();
+    const double best = run["first_scan_fit_best"].get<double>();
+    EXPECT_TRUE(std::isfinite(ref) && std::isfinite(best)) << ref << " " << best;
+    EXPECT_EQ(run["first_scan_fit_reference"], k["per_run"][r]["first_scan_fit_reference"]);
+    EXPECT_EQ(run["first_scan_fit_best"], k["per_run"][r]["first_scan_fit_best"]);
+  }
+  const auto tracking = nlohmann::json::parse(run_cli(laser("--json --threads 1")).out);
+  EXPECT_FALSE(tracking["per_run"][0].contains("first_scan_fit_reference"));
+  EXPECT_FALSE(tracking["per_run"][0].contains("first_scan_fit_best"));
+}
+
+}  // namespace
