@@ -131,8 +131,8 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
     if (is_smoother(s)) {
       require(s.lag >= 0, "da: expected a lag L >= 1 (0: the default {}), got {}", kDefaultLag,
               s.lag);
-      require(s.starts >= 0, "da: expected starts >= 1 (0: the default {}), got {}",
-              kDefaultStarts, s.starts);
+      require(s.starts >= 0, "da: expected starts >= 1 (0: the default {}), got {}", kDefaultStarts,
+              s.starts);
       da::ImplicitSmoother check(d.problem, smoother_options(s, ctx.seed));
       (void)check;
     } else {

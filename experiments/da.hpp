@@ -49,9 +49,9 @@ struct DaSetup {
 DaSetup da_setup(const DaSettings& s, std::uint64_t seed);
 
 /// Keys: model, setting, dim, method, members, seeds, seed, jitter, regularisation, inflation,
-/// resample_threshold, map, lag and starts (implicit-smoother; null otherwise), cycles, burn_in, rmse_a {mean,
-/// sd, ci95 [lo, hi]}, spread_a, mean_ess, ms_per_cycle, resamplings_per_run, sampling_failures,
-/// runs [{seed, rmse_a, spread_a, mean_ess, ms_per_cycle}], threads, seconds.
+/// resample_threshold, map, lag and starts (implicit-smoother; null otherwise), cycles, burn_in,
+/// rmse_a {mean, sd, ci95 [lo, hi]}, spread_a, mean_ess, ms_per_cycle, resamplings_per_run,
+/// sampling_failures, runs [{seed, rmse_a, spread_a, mean_ess, ms_per_cycle}], threads, seconds.
 nlohmann::json run_da(const DaSettings& s, const RunContext& ctx);
 
 /// The 0.975 quantile of Student's t with `df` degrees of freedom (df >= 1).
