@@ -144,6 +144,15 @@ double log_mixture(const std::vector<Component>& comps, std::size_t uniform_draw
 
 }  // namespace
 
+NewtonMinimum<SmallFactor<3>> match_scan_near(const robot::LikelihoodFieldModel& model,
+                                              const robot::PreparedScan& z,
+                                              const robot::Pose& start) {
+  constexpr double s = 0.5;
+  filter::PoseObjective<robot::LikelihoodFieldModel> f;
+  f.reset(model, z, start, robot::Mat3::Identity() / (s * s), 0.0);
+  return newton_minimize<SmallFactor<3>>(f, start, filter::scan_newton_options());
+}
+
 GlobalStart global_start(const robot::LikelihoodFieldModel& model, const robot::OccupancyGrid& map,
                          const robot::LaserScan& scan, std::size_t particles, bool implicit,
                          std::uint64_t seed) {
@@ -161,8 +170,6 @@ GlobalStart global_start(const robot::LikelihoodFieldModel& model, const robot::
   GlobalStart g;
   g.particles.resize(particles);
   g.log_weights.assign(particles, kNegInf);
-  const double s = 0.5;
-  const robot::Mat3 pull = robot::Mat3::Identity() / (s * s);
   std::vector<Component> comps(k_starts);
   parallel_for(particles, [&](std::size_t k) {
     Rng rng({seed, 0, k, purpose::kGlobalInit});
@@ -171,9 +178,7 @@ GlobalStart global_start(const robot::LikelihoodFieldModel& model, const robot::
       return;
     }
     const robot::Pose& start = starts[k];
-    filter::PoseObjective<robot::LikelihoodFieldModel> f;
-    f.reset(model, z, start, pull, 0.0);
-    const auto r = newton_minimize<SmallFactor<3>>(f, start, filter::scan_newton_options());
+    const auto r = match_scan_near(model, z, start);
     Component& c = comps[k];
     c.ok = r.factor_ok && std::isfinite(r.value) && r.x.allFinite();
     if (c.ok) {

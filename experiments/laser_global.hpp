@@ -21,6 +21,8 @@
 
 #include <Eigen/Core>
 
+#include "implicit/core/gaussian_factor.hpp"
+#include "implicit/core/newton.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/filter/recovery.hpp"
@@ -69,6 +71,14 @@ GlobalStart uniform_global_start(const Model& model, const FreeSpace& space,
   });
   return g;
 }
+
+/// Scan matching near `start`: Newton from it on -log p(z | x) + |x - start|^2 / (2 s^2), the
+/// weak pull s = 0.5 m and 0.5 rad keeping it in the start's neighbourhood (a corridor's
+/// direction or a featureless wall leave -log p(z | x) flat). The global start's components and
+/// a global run's first-scan fit (laser_mcl.hpp) use it. `model` must be differentiable().
+NewtonMinimum<SmallFactor<3>> match_scan_near(const robot::LikelihoodFieldModel& model,
+                                              const robot::PreparedScan& z,
+                                              const robot::Pose& start);
 
 /// A global start on the likelihood field: uniform for the bootstrap proposal (or a model
 /// without derivatives), the multi-start mixture for the implicit one. Throws InvalidArgument

@@ -14,11 +14,9 @@
 
 #include "experiments/laser_global.hpp"
 #include "implicit/core/error.hpp"
-#include "implicit/core/newton.hpp"
 #include "implicit/core/weights.hpp"
 #include "implicit/filter/monte_carlo_localization.hpp"
 #include "implicit/filter/pose_clusters.hpp"
-#include "implicit/filter/pose_objective.hpp"
 #include "implicit/robot/distance_field.hpp"
 
 namespace implicit::experiments {
@@ -137,16 +135,14 @@ GlobalStart start_anywhere(const LaserMclSettings& s, const LaserDataset& d, con
   }
 }
 
-/// log p(z | x) at the scan-matched pose nearest `reference` (Newton on -log p(z | x) with the
-/// global start's weak pull towards it, for a differentiable model; else at `reference`).
+/// log p(z | x) at the scan-matched pose nearest `reference` (match_scan_near, for a
+/// differentiable model; else at `reference`).
 template <typename Model>
 double fit_near(const Model& model, const typename Model::Prepared& z,
                 const robot::Pose& reference) {
   if constexpr (std::is_same_v<Model, robot::LikelihoodFieldModel>) {
     if (model.differentiable()) {
-      filter::PoseObjective<robot::LikelihoodFieldModel> f;
-      f.reset(model, z, reference, robot::Mat3::Identity() / (0.5 * 0.5), 0.0);
-      const auto r = newton_minimize<SmallFactor<3>>(f, reference, filter::scan_newton_options());
+      const auto r = match_scan_near(model, z, reference);
       if (r.x.allFinite())
         return std::max(model.log_likelihood(z, r.x), model.log_likelihood(z, reference));
     }
