@@ -40,8 +40,8 @@ namespace {
 using nlohmann::json;
 
 const std::vector<std::string> kExperiments = {
-    "slit",      "arm",      "himmelblau", "mcl", "slam", "proposal_gain", "global_localization",
-    "laser_mcl", "grid_slam"};
+    "slit",      "arm",       "himmelblau", "mcl", "slam", "proposal_gain", "global_localization",
+    "laser_mcl", "grid_slam", "da"};
 
 struct ReproduceOptions {
   bool quick = false;
@@ -147,10 +147,17 @@ struct FigureSpec {
   int number;
   std::string experiment;
 };
-const std::vector<FigureSpec> kFigures = {
-    {1, "slit"},       {2, "slit"},      {4, "arm"},           {5, "himmelblau"},
-    {6, "mcl"},        {7, "slam"},      {8, "proposal_gain"}, {9, "global_localization"},
-    {10, "laser_mcl"}, {11, "grid_slam"}};
+const std::vector<FigureSpec> kFigures = {{1, "slit"},
+                                          {2, "slit"},
+                                          {4, "arm"},
+                                          {5, "himmelblau"},
+                                          {6, "mcl"},
+                                          {7, "slam"},
+                                          {8, "proposal_gain"},
+                                          {9, "global_localization"},
+                                          {10, "laser_mcl"},
+                                          {11, "grid_slam"},
+                                          {12, "da"}};
 
 // The plot scripts: $IMPLICIT_PLOTS_DIR, else <prefix>/share/implicit/plots of the install (or the
 // build tree's link to python/plots). Empty, with the reason in `error`, when there are none: the

@@ -29,8 +29,8 @@ namespace {
 
 // Experiment names are results.json's keys; what the summary says of each is text.
 const std::vector<std::string> kSummaryExperiments = {
-    "slit",      "arm",      "himmelblau", "mcl", "slam", "proposal_gain", "global_localization",
-    "laser_mcl", "grid_slam"};
+    "slit",      "arm",       "himmelblau", "mcl", "slam", "proposal_gain", "global_localization",
+    "laser_mcl", "grid_slam", "da"};
 
 void introduction(Document& doc, const json& results, const Numbers& numbers) {
   const Text& text = numbers.text;
@@ -129,6 +129,7 @@ Document build_report_with(const json& results, const std::filesystem::path& dir
   global_localization_section(doc, results, numbers);
   laser_mcl_section(doc, results, numbers);
   grid_slam_section(doc, results, numbers);
+  da_section(doc, results, numbers);
   closing(doc, results, numbers.text);
   return doc;
 }
@@ -169,7 +170,7 @@ void write_csv(const std::filesystem::path& file, const std::vector<std::string>
 // not computed). results.json may have been edited: a string where a number belongs would
 // otherwise be copied into the CSV as if it were a result.
 bool table_text_setting(const std::string& key) {
-  return key == "mode" || key == "config" || key == "method";
+  return key == "mode" || key == "config" || key == "method" || key == "setting";
 }
 
 std::string checked_csv_value(const json& value, bool text, const std::string& where,
@@ -291,6 +292,19 @@ std::vector<std::string> write_table_csvs(const json& results, const std::filesy
     });
     write_csv(dir / "table6_slam.csv", columns, rows);
     written.emplace_back("table6_slam.csv");
+  }
+  {
+    // Data assimilation beside DAPPER (apps/reproduce_da.cpp); figure 12 reads this file.
+    const std::vector<std::string> s = {
+        "setting", "method", "members", "jitter", "inflation", "resample_threshold", "lag"};
+    const std::vector<std::string> r = {"seeds",    "rmse_a_mean", "rmse_a_lo",    "rmse_a_hi",
+                                        "spread_a", "mean_ess",    "ms_per_cycle", "dapper_rmse_a"};
+    std::vector<std::string> columns = s;
+    columns.insert(columns.end(), r.begin(), r.end());
+    auto rows = rows_of(results, "da", source, s, r,
+                        [](const json&) { return std::vector<std::string>{}; });
+    write_csv(dir / "table_da.csv", columns, rows);
+    written.emplace_back("table_da.csv");
   }
   return written;
 }

@@ -42,10 +42,7 @@ Table grid_slam_table(const json& results, const Text& text) {
                                     s.value("proposal", std::string("?")),
                                     std::to_string(s.value("particles", 0))};
     if (!ok(&run)) {
-      row.push_back("—");
-      row.push_back(cell(&run, [](const json&) { return ""; }));
-      row.resize(t.header.size(), "—");
-      t.rows.push_back(row);
+      add_failed_row(t, std::move(row), run);
       continue;
     }
     const json& r = run.at("result");
@@ -69,13 +66,8 @@ Table grid_slam_table(const json& results, const Text& text) {
 
 void grid_slam_section(Document& doc, const json& results, const Numbers& numbers) {
   const Text& text = numbers.text;
-  doc.heading(2, text("grid.heading"));
-  experiment_status(doc, results, text, kGridSlamExperiment);
-  doc.paragraph(text("grid.intro"));
-  doc.table(grid_slam_table(results, text));
-  doc.paragraph(text("grid.reading"));
-  figure(doc, results, text, 11, "grid.figure11");
-  settings_list(doc, results, text, kGridSlamExperiment);
+  table_and_figure_section(doc, results, text, kGridSlamExperiment, "grid",
+                           grid_slam_table(results, text), 11);
 }
 
 }  // namespace implicit::app::report::parts

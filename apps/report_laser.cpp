@@ -66,10 +66,7 @@ Table laser_table(const json& results, const Text& text, const std::string& star
     std::vector<std::string> row = {s.value("proposal", std::string("?")),
                                     std::to_string(s.value("particles", 0))};
     if (!ok(&run)) {
-      row.push_back("—");
-      row.push_back(cell(&run, [](const json&) { return ""; }));
-      row.resize(t.header.size(), "—");
-      t.rows.push_back(row);
+      add_failed_row(t, std::move(row), run);
       continue;
     }
     const json& r = run.at("result");

@@ -2,6 +2,7 @@
 #include "report_parts.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -39,6 +40,13 @@ std::string cell(const json* run, const std::function<std::string(const json&)>&
 std::string value_cell(const json* run, const std::string& key, int digits) {
   return cell(run,
               [&](const json& r) { return r.contains(key) ? number(r.at(key), digits) : "–"; });
+}
+
+void add_failed_row(Table& t, std::vector<std::string> row, const json& run) {
+  row.push_back("—");
+  row.push_back(cell(&run, [](const json&) { return ""; }));
+  row.resize(t.header.size(), "—");
+  t.rows.push_back(std::move(row));
 }
 
 std::string int_cell(const json* run, const std::string& key) {
@@ -128,6 +136,18 @@ std::string failures_note(const json& results, const Text& text, const std::stri
 }
 
 }  // namespace
+
+void table_and_figure_section(Document& doc, const json& results, const Text& text,
+                              const std::string& experiment, const std::string& prefix,
+                              const Table& table, int figure_number) {
+  doc.heading(2, text(prefix + ".heading"));
+  experiment_status(doc, results, text, experiment);
+  doc.paragraph(text(prefix + ".intro"));
+  doc.table(table);
+  doc.paragraph(text(prefix + ".reading"));
+  figure(doc, results, text, figure_number, fmt::format("{}.figure{}", prefix, figure_number));
+  settings_list(doc, results, text, experiment);
+}
 
 void experiment_status(Document& doc, const json& results, const Text& text,
                        const std::string& experiment) {

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -43,6 +44,9 @@ const json& run_count(const json& result);
 std::string cell(const json* run, const std::function<std::string(const json&)>& show);
 std::string value_cell(const json* run, const std::string& key, int digits);
 std::string int_cell(const json* run, const std::string& key);
+/// Appends the row of a configuration without a result: its settings cells `row`, "—", the
+/// failure cell ("not run" / "failed"), and "—" to the table's width.
+void add_failed_row(Table& t, std::vector<std::string> row, const json& run);
 /// "mean (SE se)" of a result's mean over runs `key` and its sd `sd_key`.
 std::string mean_se_cell(const json* run, const std::string& key, const std::string& sd_key,
                          int digits);
@@ -73,6 +77,12 @@ void figure(Document& doc, const json& results, const Text& text, int n,
             const std::string& caption_key);
 void settings_list(Document& doc, const json& results, const Text& text,
                    const std::string& experiment);
+/// A section of one table and one figure: the heading, the experiment's status, the text
+/// "<prefix>.intro", `table`, "<prefix>.reading", figure `figure_number` with its caption
+/// "<prefix>.figure<N>", and the settings list.
+void table_and_figure_section(Document& doc, const json& results, const Text& text,
+                              const std::string& experiment, const std::string& prefix,
+                              const Table& table, int figure_number);
 void experiment_status(Document& doc, const json& results, const Text& text,
                        const std::string& experiment);
 
@@ -88,5 +98,6 @@ void proposal_gain_section(Document& doc, const json& results, const Numbers& nu
 void global_localization_section(Document& doc, const json& results, const Numbers& numbers);
 void laser_mcl_section(Document& doc, const json& results, const Numbers& numbers);
 void grid_slam_section(Document& doc, const json& results, const Numbers& numbers);
+void da_section(Document& doc, const json& results, const Numbers& numbers);
 
 }  // namespace implicit::app::report::parts

@@ -298,7 +298,8 @@ Plan make_plan(bool quick, const std::vector<std::string>& only) {
       {"proposal_gain", add_proposal_gain},
       {"global_localization", add_global_localization},
       {"laser_mcl", add_laser_mcl},
-      {"grid_slam", add_grid_slam}};
+      {"grid_slam", add_grid_slam},
+      {"da", add_da}};
   for (const auto& [name, add] : adders)
     if (selected(name)) add(plan, quick);
   return plan;

@@ -37,4 +37,8 @@ void add_laser_mcl(Plan& plan, bool quick);
 /// logs with the three proposals.
 void add_grid_slam(Plan& plan, bool quick);
 
+/// Adds the da experiment (apps/reproduce_da.cpp): data assimilation on Lorenz-63 and Lorenz-96
+/// beside DAPPER's published rmse.a.
+void add_da(Plan& plan, bool quick);
+
 }  // namespace implicit::app

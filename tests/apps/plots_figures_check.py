@@ -9,7 +9,9 @@ matplotlib's API rather than by eye, what a reader of the figure sees:
 - Figure 8: the Car Park configurations A and B have different markers;
 - Figure 9: all panels have one y-range, and each a legend naming its runs;
 - Figure 10: the map panel is zoomed to the path (a short path on a large map is not a few pixels);
-- Figure 11: the map panel shows the whole map and every path.
+- Figure 11: the map panel shows the whole map and every path;
+- Figure 12: a panel per setting, each with every method of its rows and DAPPER's values as open
+  markers.
 
 The data are chosen so that matplotlib's own ticks label only one tick on several log axes (CPU
 times from 0.004 to 0.06 ms, step lengths from 0.02 to 0.4 s, a narrow RMSE range), and so that
@@ -161,6 +163,21 @@ def make_data():
                   [(k, 2.0 * k, 0.5 * k, scale * (k % 4), 0.0,
                     "" if k == 0 else scale * (1 + k % 4)) for k in range(30)])
 
+    # Figure 12: both settings; one row without an interval (one seed) and one without DAPPER.
+    write_csv("table_da.csv",
+              ["setting", "method", "members", "jitter", "inflation", "resample_threshold", "lag",
+               "seeds", "rmse_a_mean", "rmse_a_lo", "rmse_a_hi", "spread_a", "mean_ess",
+               "ms_per_cycle", "dapper_rmse_a"],
+              [("sakov2012", "etkf", 10, 0, 1.1, 0.5, "", 10, 0.62, 0.60, 0.64, 0.7, 10, 0.01, 0.6),
+               ("sakov2012", "bootstrap", 100, 0.2, 1, 0.8, "", 10, 0.41, 0.38, 0.43, 0.5, 60,
+                0.05, 0.38),
+               ("sakov2012", "bootstrap", 800, 0.07, 1, 0.5, "", 1, 0.30, "", "", 0.4, 300, 0.3,
+                0.28),
+               ("sakov2012", "implicit-smoother", 100, 0, 1, 0.5, 3, 10, 0.30, 0.29, 0.32, 0.37,
+                97, 0.35, ""),
+               ("bocquet2010", "implicit", 100, 0.3, 1, 0.5, "", 10, 0.80, 0.72, 0.88, 0.8, 45,
+                0.15, 0.44)])
+
 
 # ---- What a reader sees ---------------------------------------------------------------------
 
@@ -285,6 +302,23 @@ def check_figure11(fig):
     check(len(names) == 4, f"figure11: expected the reference and three proposals, got {names}")
 
 
+def check_figure12(fig):
+    titles = [ax.get_title() for ax in fig.axes]
+    check(len(fig.axes) == 2 and "Lorenz-63" in titles[0] and "Lorenz-96" in titles[1],
+          f"figure12: expected a Lorenz-63 and a Lorenz-96 panel, got {titles}")
+    expected = ({"ETKF", "bootstrap PF", "implicit smoother"}, {"implicit PF"})
+    for ax, methods in zip(fig.axes, expected):
+        names = [t.get_text() for t in ax.get_legend().get_texts()] if ax.get_legend() else []
+        check({n for n in names if not n.endswith(": DAPPER")} == methods,
+              f"figure12: {ax.get_title()}: expected the methods {sorted(methods)}, got {names}")
+        open_markers = [ln for ln in ax.get_lines()
+                        if ln.get_linestyle() == "None" and ln.get_markerfacecolor() == "none"]
+        dapper = sum(len(ln.get_xdata()) for ln in open_markers)
+        want = 3 if "Lorenz-63" in ax.get_title() else 1
+        check(dapper == want,
+              f"figure12: {ax.get_title()}: expected {want} open DAPPER markers, got {dapper}")
+
+
 def check_helper():
     """label_log_axis on ranges matplotlib labels once or never, and one it labels well."""
     for lo, hi in ((0.004, 0.06), (0.02, 0.4), (0.11, 0.13), (1.001, 1.002), (1e-3, 1e3),
@@ -307,12 +341,12 @@ def check_helper():
 
 make_data()
 check_helper()
-for number in (1, 2, 4, 5, 6, 7, 8, 9, 10, 11):
+for number in (1, 2, 4, 5, 6, 7, 8, 9, 10, 11, 12):
     figure = render(number)
     check_log_axes(figure, f"figure{number}")
     check_texts_apart(figure, f"figure{number}")
     {8: check_figure8, 9: check_figure9, 10: check_figure10,
-     11: check_figure11}.get(number, lambda f: None)(figure)
+     11: check_figure11, 12: check_figure12}.get(number, lambda f: None)(figure)
     check((tmp / f"figure{number}.png").is_file(), f"figure{number}: no PNG written")
 
 if FAILURES:

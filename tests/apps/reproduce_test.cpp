@@ -32,13 +32,14 @@ bool require_all() {
 
 // Which figures and table files each experiment produces.
 const std::map<std::string, std::vector<int>> kFigures = {
-    {"slit", {1, 2}},    {"arm", {4}},       {"himmelblau", {5}},
-    {"mcl", {6}},        {"slam", {7}},      {"global_localization", {9}},
-    {"laser_mcl", {10}}, {"grid_slam", {11}}};
+    {"slit", {1, 2}},    {"arm", {4}},        {"himmelblau", {5}},
+    {"mcl", {6}},        {"slam", {7}},       {"global_localization", {9}},
+    {"laser_mcl", {10}}, {"grid_slam", {11}}, {"da", {12}}};
 const std::map<std::string, std::string> kTables = {{"slit", "table2_slit.csv"},
                                                     {"himmelblau", "table4_himmelblau.csv"},
                                                     {"mcl", "table5_mcl.csv"},
-                                                    {"slam", "table6_slam.csv"}};
+                                                    {"slam", "table6_slam.csv"},
+                                                    {"da", "table_da.csv"}};
 
 int data_rows(const std::filesystem::path& csv) {
   const std::string text = read_file(csv);
@@ -79,7 +80,8 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
   for (const char* heading :
        {"Table 2", "Table 4", "Table 5", "Table 6", "Summary", "How to repeat this run",
         "Beyond the paper: global localization and kidnapping",
-        "Beyond the paper: laser localization on a recorded log"}) {
+        "Beyond the paper: laser localization on a recorded log",
+        "Beyond the paper: data assimilation beside DAPPER"}) {
     EXPECT_NE(md.find(heading), std::string::npos) << heading;
     EXPECT_NE(html.find(heading), std::string::npos) << heading;
   }
@@ -182,6 +184,29 @@ TEST(Reproduce, QuickRunWritesTheReportResultsAndEveryFileOfEachSuccessfulExperi
       EXPECT_EQ(run["result"]["scans_processed"], scans) << run["label"];
       EXPECT_EQ(run["result"]["datasets"], 2) << run["label"];
     }
+  }
+
+  // da: DAPPER's published value beside each row that has one (data/da/dapper_benchmarks.json),
+  // null beside the others, and one table row per configuration.
+  if (results["experiments"]["da"].value("status", "") == "ok") {
+    const auto& runs = results["experiments"]["da"]["runs"];
+    int with_dapper = 0;
+    for (const auto& run : runs) {
+      const auto& s = run["settings"];
+      const auto& r = run["result"];
+      EXPECT_EQ(r["rmse_a_mean"], r["rmse_a"]["mean"]) << run["label"];
+      EXPECT_EQ(r["seeds"], 2) << run["label"];  // quick
+      if (s["setting"] == "sakov2012" && s["method"] == "etkf") {
+        EXPECT_EQ(r["dapper_rmse_a"], 0.6);
+      }
+      if (s["method"] == "implicit-smoother") {
+        EXPECT_TRUE(r["dapper_rmse_a"].is_null());
+      }
+      with_dapper += r["dapper_rmse_a"].is_number() ? 1 : 0;
+    }
+    EXPECT_EQ(data_rows(dir.path() / "table_da.csv"), static_cast<int>(runs.size()));
+    // Quick runs N <= 100: Lorenz-63's ETKF, EnKF and bootstrap, Lorenz-96's bootstrap and OptPF.
+    EXPECT_EQ(with_dapper, 5);
   }
 
   // The report can be rebuilt from results.json alone.
