@@ -33,11 +33,8 @@ enum class PsiMethod {
   kMonteCarlo,  ///< plain Monte Carlo over forward-Euler paths
 };
 
-/// How implicit sampling maps a reference sample xi to a path (spec §1.2, §1.3).
-enum class SamplingMap {
-  kLinear,  ///< y = mu + L^{-T} xi, weight exp(F_hat - F)
-  kRandom,  ///< y = mu + lambda L^{-T} xi / |xi| with F(y) - phi = |xi|^2 / 2 (corrected Jacobian)
-};
+/// How implicit sampling maps a reference sample xi to a path (core/types.hpp).
+using SamplingMap = MapKind;
 
 inline std::string_view to_string(SamplingMap m) {
   return m == SamplingMap::kLinear ? "linear" : "random";

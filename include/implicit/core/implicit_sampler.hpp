@@ -28,8 +28,6 @@
 
 namespace implicit {
 
-enum class MapKind { kLinear, kRandom };
-
 struct SamplerOptions {
   MapKind map = MapKind::kLinear;
   MinimizeOptions minimize{};

@@ -40,13 +40,15 @@
 
 #include <Eigen/Core>
 
+#include "implicit/core/types.hpp"
 #include "implicit/da/model.hpp"
 #include "implicit/filter/particle_engine.hpp"
 
 namespace implicit::da {
 
 enum class Method { kBootstrap, kImplicit, kEnkf, kEtkf };
-enum class ImplicitMap { kLinear, kRandom };
+/// The implicit filter's map (core/types.hpp).
+using ImplicitMap = MapKind;
 enum class Regularisation { kIsotropic, kCovariance };
 
 std::string_view to_string(Method m);

@@ -80,12 +80,12 @@ bool predict_particle(const Ctx& ctx, const robot::Pose& previous, robot::Pose& 
 /// The kernel's maps and weight (spec §1.2, §1.3) at the usable minimum nr of obj, with the
 /// factor used at mu: the implicit proposals' sample x = map(xi) and its log weight (-inf, and
 /// the particle marked failed, when it is not finite).
-template <typename Objective, typename MapKind, typename Stats>
-double sample_at_minimum(const Objective& obj, const NewtonMinimum<SmallFactor<3>>& nr, MapKind map,
+template <typename Objective, typename Map, typename Stats>
+double sample_at_minimum(const Objective& obj, const NewtonMinimum<SmallFactor<3>>& nr, Map map,
                          const Vec<3>& xi, robot::Pose& next, Stats& st) {
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
   double log_w = kNegInf;
-  if (map == MapKind::kLinear) {
+  if (map == Map::kLinear) {
     log_w = linear_map(obj, nr.x, nr.factor, xi, next);
   } else if (implicit::random_map(obj, nr.x, nr.value, nr.factor, xi, next, log_w) !=
              RayStatus::kOk) {
@@ -151,8 +151,8 @@ double defensive_sample(const Objective& obj, const NewtonMinimum<SmallFactor<3>
   return log_w;
 }
 
-template <typename Motion, typename Observation, typename Stats, typename MapKind>
-double implicit_step(const ObservationContext<Motion, Observation>& ctx, MapKind map,
+template <typename Motion, typename Observation, typename Stats, typename Map>
+double implicit_step(const ObservationContext<Motion, Observation>& ctx, Map map,
                      const NewtonOptions& newton, int starts, double defensive,
                      const robot::Pose& previous, Rng& rng, robot::Pose& next, Stats& st) {
   constexpr double kNegInf = -std::numeric_limits<double>::infinity();
@@ -198,7 +198,7 @@ double implicit_step(const ObservationContext<Motion, Observation>& ctx, MapKind
     }
     return lw;
   }
-  if (defensive > 0.0 && map == MapKind::kLinear) {
+  if (defensive > 0.0 && map == Map::kLinear) {
     const double u = rng.uniform();
     return defensive_sample(obj, nr, f, sigma1, defensive, u, xi, next, st);
   }

@@ -37,6 +37,7 @@
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/rng.hpp"
+#include "implicit/core/types.hpp"
 #include "implicit/filter/mcl_objective.hpp"
 #include "implicit/filter/observation_proposals.hpp"
 #include "implicit/robot/landmark_observation.hpp"
@@ -56,7 +57,8 @@ struct ParticleStats {
   bool failed = false;    ///< the particle's weight was set to zero (non-finite model output)
 };
 
-enum class ImplicitMap { kLinear, kRandom };
+/// The implicit proposal's map (core/types.hpp).
+using ImplicitMap = MapKind;
 
 namespace detail {
 
