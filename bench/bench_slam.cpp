@@ -126,7 +126,7 @@ void BM_AssociationVsLandmarks(benchmark::State& state) {
   const bool indexed = state.range(1) != 0;
   const double side = std::sqrt(25.0 * static_cast<double>(n));
   Rng rng({5, n, 0, purpose::kData});
-  LandmarkMap map;
+  LandmarkEstimates map;
   LandmarkGridIndex index;
   for (std::size_t k = 0; k < n; ++k) {
     // One draw per declarator: the order of function arguments is unspecified.
@@ -200,10 +200,10 @@ std::vector<std::size_t> ancestors(std::size_t m, std::uint64_t step) {
 void BM_ResamplingPersistent(benchmark::State& state) {
   const auto n = static_cast<std::size_t>(state.range(0));
   const std::size_t m = 100;
-  LandmarkMap base;
+  LandmarkEstimates base;
   for (std::size_t k = 0; k < n; ++k)
     base.push_back({Vec<2>(static_cast<double>(k), 0.0), Mat<2>::Identity()});
-  std::vector<LandmarkMap> maps(m, base), next(m);
+  std::vector<LandmarkEstimates> maps(m, base), next(m);
   std::uint64_t step = 0;
   for (auto _ : state) {
     const auto a = ancestors(m, ++step);

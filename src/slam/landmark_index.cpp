@@ -154,7 +154,7 @@ bool score_landmark(const RangeBearingSensor& s, const Pose& f, const Mat<3>& si
   return true;
 }
 
-double trace_bound_of(const LandmarkMap& map) {
+double trace_bound_of(const LandmarkEstimates& map) {
   double t = 0.0;
   map.for_each([&](std::size_t, const LandmarkEstimate& l) { t = std::max(t, l.cov.trace()); });
   return t;
@@ -162,7 +162,7 @@ double trace_bound_of(const LandmarkMap& map) {
 
 }  // namespace
 
-robot::Association associate_scan(const LandmarkMap& map, const RangeBearingSensor& sensor,
+robot::Association associate_scan(const LandmarkEstimates& map, const RangeBearingSensor& sensor,
                                   const Pose& f, const Mat<3>& sigma1, const Measurement& z,
                                   double gate, double cov_trace_bound) {
   const double bound = cov_trace_bound < 0.0 ? trace_bound_of(map) : cov_trace_bound;
@@ -176,7 +176,7 @@ robot::Association associate_scan(const LandmarkMap& map, const RangeBearingSens
       gate);
 }
 
-robot::Association associate_indexed(const LandmarkMap& map, const LandmarkGridIndex& index,
+robot::Association associate_indexed(const LandmarkEstimates& map, const LandmarkGridIndex& index,
                                      const RangeBearingSensor& sensor, const Pose& f,
                                      const Mat<3>& sigma1, const Measurement& z, double gate,
                                      std::vector<std::uint32_t>& scratch) {

@@ -172,7 +172,7 @@ class EkfSlamFilter final : public SlamFilter {
 /// A particle of particle SLAM: a pose and its own (copy-on-write) landmark map.
 struct Particle {
   Pose x = Pose::Zero();
-  LandmarkMap map;
+  LandmarkEstimates map;
 };
 
 struct ParticleOutcome {
@@ -216,7 +216,7 @@ class ParticleSlamFilter final : public SlamFilter {
   void set_known_map(std::span<const Landmark> landmarks) override {
     require(stats_.steps == 0 && engine_.particles()[0].map.empty(),
             "particle SLAM: set_known_map must be called before the first step");
-    LandmarkMap map;
+    LandmarkEstimates map;
     for (std::size_t k = 0; k < landmarks.size(); ++k) {
       map.push_back({landmarks[k], Mat<2>::Zero()});
       index_.insert(static_cast<std::uint32_t>(k), landmarks[k], 0.0);

@@ -31,7 +31,7 @@ Mat<2> random_cov(Rng& rng, double max_trace) {
 // One random association problem: a map with landmarks around the pose, many of them placed on
 // or within 1e-12 m of cell borders, and a detection of one of them (or of nothing).
 struct Case {
-  LandmarkMap map;
+  LandmarkEstimates map;
   LandmarkGridIndex index;
   double trace_bound = 0.0;
   Pose f = Pose::Zero();
@@ -140,7 +140,7 @@ TEST(LandmarkIndex, MovedLandmarksAndSharedSlotsStayFindable) {
   // creates slot n at a place where the other has nothing.
   const RangeBearingSensor s;
   LandmarkGridIndex index;
-  LandmarkMap a;
+  LandmarkEstimates a;
   for (int i = 0; i < 40; ++i) {
     const Vec<2> m(2.0 * i, i % 2 ? 5.0 : -5.0);
     // Landmark 20 starts wide (covariance class 3), the others narrow (class 0).
@@ -149,7 +149,7 @@ TEST(LandmarkIndex, MovedLandmarksAndSharedSlotsStayFindable) {
     index.insert(static_cast<std::uint32_t>(i), m, cov.trace());
   }
   EXPECT_EQ(index.max_class(), 3);
-  LandmarkMap b = a;
+  LandmarkEstimates b = a;
   LandmarkEstimate moved = b.get(10);
   moved.mean += Vec<2>(0.0, 9.0);  // from y = -5 to y = 4: another cell
   b.set(10, moved);
@@ -166,7 +166,7 @@ TEST(LandmarkIndex, MovedLandmarksAndSharedSlotsStayFindable) {
   EXPECT_EQ(a.get(10).mean, Vec<2>(20.0, -5.0));  // the other particle is untouched
   const Mat<3> sigma1 = 1e-4 * Mat<3>::Identity();
   std::vector<std::uint32_t> scratch;
-  for (const LandmarkMap* map : {&a, &b})
+  for (const LandmarkEstimates* map : {&a, &b})
     for (double x = -2.0; x < 82.0; x += 1.7)
       for (double bearing = 0.0; bearing <= kPi; bearing += 0.2) {
         const Pose f(x, 0.0, kPi / 2);

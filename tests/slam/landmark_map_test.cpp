@@ -11,8 +11,8 @@ namespace {
 
 LandmarkEstimate lm(double v) { return {Vec<2>(v, -v), Mat<2>::Identity() * v}; }
 
-TEST(LandmarkMap, PushGetSetAcrossLevels) {
-  LandmarkMap a;
+TEST(LandmarkEstimates, PushGetSetAcrossLevels) {
+  LandmarkEstimates a;
   EXPECT_TRUE(a.empty());
   const int n = 1000;  // 8^3 < 1000 < 8^4: four levels of internal nodes
   for (int i = 0; i < n; ++i) a.push_back(lm(i));
@@ -33,10 +33,10 @@ TEST(LandmarkMap, PushGetSetAcrossLevels) {
 
 // The defining property: after sharing (what resampling does), an update through one handle
 // leaves every other handle's map unchanged, and unchanged parts stay shared.
-TEST(LandmarkMap, UpdateLeavesOtherParticlesUnchanged) {
-  LandmarkMap parent;
+TEST(LandmarkEstimates, UpdateLeavesOtherParticlesUnchanged) {
+  LandmarkEstimates parent;
   for (int i = 0; i < 300; ++i) parent.push_back(lm(i));
-  std::vector<LandmarkMap> particles(10, parent);  // resampled copies
+  std::vector<LandmarkEstimates> particles(10, parent);  // resampled copies
   for (const auto& p : particles) EXPECT_TRUE(p.shares_root_with(parent));
   particles[3].set(42, lm(1e6));
   particles[3].push_back(lm(7));
@@ -54,12 +54,13 @@ TEST(LandmarkMap, UpdateLeavesOtherParticlesUnchanged) {
   for (const auto& p : particles) shared += p.unique_bytes(seen);
   std::unordered_set<const void*> one;
   const std::size_t single = parent.unique_bytes(one);
-  EXPECT_LT(shared, single + 3 * 4 * LandmarkMap::internal_bytes() + 3 * LandmarkMap::leaf_bytes());
+  EXPECT_LT(shared, single + 3 * 4 * LandmarkEstimates::internal_bytes() +
+                        3 * LandmarkEstimates::leaf_bytes());
   EXPECT_GT(shared, single);
 }
 
-TEST(LandmarkMap, EmptyMapAndSingleItem) {
-  LandmarkMap a;
+TEST(LandmarkEstimates, EmptyMapAndSingleItem) {
+  LandmarkEstimates a;
   std::unordered_set<const void*> seen;
   EXPECT_EQ(a.unique_bytes(seen), 0u);
   a.for_each([](std::size_t, const LandmarkEstimate&) { FAIL(); });

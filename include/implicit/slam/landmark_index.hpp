@@ -108,14 +108,15 @@ SearchDisc association_search_disc(const robot::RangeBearingSensor& sensor, cons
 /// The reference rule: scores every landmark of the map in slot order. A cheap range check
 /// skips landmarks that cannot pass the gate; it needs a bound on the traces of the landmark
 /// covariances (negative: computed from the map, one extra pass).
-robot::Association associate_scan(const LandmarkMap& map, const robot::RangeBearingSensor& sensor,
-                                  const Pose& f, const Mat<3>& sigma1, const Measurement& z,
-                                  double gate, double cov_trace_bound = -1.0);
+robot::Association associate_scan(const LandmarkEstimates& map,
+                                  const robot::RangeBearingSensor& sensor, const Pose& f,
+                                  const Mat<3>& sigma1, const Measurement& z, double gate,
+                                  double cov_trace_bound = -1.0);
 
 /// The same association through the index: scores only the candidates the index returns (in
 /// slot order, so ties resolve as in the scan). Falls back to the scan when the discs cover more
 /// cells than the map has landmarks. `scratch` avoids an allocation per call.
-robot::Association associate_indexed(const LandmarkMap& map, const LandmarkGridIndex& index,
+robot::Association associate_indexed(const LandmarkEstimates& map, const LandmarkGridIndex& index,
                                      const robot::RangeBearingSensor& sensor, const Pose& f,
                                      const Mat<3>& sigma1, const Measurement& z, double gate,
                                      std::vector<std::uint32_t>& scratch);

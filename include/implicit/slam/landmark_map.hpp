@@ -157,7 +157,8 @@ class PersistentArray {
   int depth_ = 0;  ///< number of internal levels above the leaves
 };
 
-/// The map of one particle.
-using LandmarkMap = PersistentArray<LandmarkEstimate>;
+/// The map of one particle: its landmark estimates, shared with its copies until written
+/// (robot::LandmarkMap is a known map of landmark positions).
+using LandmarkEstimates = PersistentArray<LandmarkEstimate>;
 
 }  // namespace implicit::slam
