@@ -259,3 +259,28 @@ TEST(Reproduce, MissingPlotScriptsFailTheFigureNotTheReport) {
 }
 
 }  // namespace
+
+// A DAPPER table that does not parse fails the da rows with a message naming the file (exit 3:
+// the report is still written).
+TEST(Reproduce, ABadDapperTableFailsTheDaRowsNamingIt) {
+  TempDir dir("reproduce_bad_dapper");
+  const auto data = dir.path() / "data";
+  std::filesystem::create_directories(data / "da");
+  std::filesystem::copy(std::filesystem::path(IMPLICIT_SOURCE_DIR) / "data" / "report",
+                        data / "report");
+  implicit::test::write_file(data / "da" / "dapper_benchmarks.json", "{\"rows\": [");
+  setenv("IMPLICIT_DATA_DIR", data.c_str(), 1);
+  const auto r = run_cli("reproduce --quick --only da --no-figures --quiet --out '" +
+                         (dir.path() / "out").string() + "'");
+  unsetenv("IMPLICIT_DATA_DIR");
+  EXPECT_EQ(r.code, 3) << r.err;
+  const json results = json::parse(read_file(dir.path() / "out" / "results.json"));
+  const auto& da = results["experiments"]["da"];
+  EXPECT_EQ(da["status"], "failed");
+  for (const auto& run : da["runs"]) {
+    const std::string error = run.value("error", "");
+    EXPECT_NE(error.find("dapper_benchmarks.json"), std::string::npos) << error;
+    EXPECT_NE(error.find("is not DAPPER's table"), std::string::npos) << error;
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "report.md"));
+}
