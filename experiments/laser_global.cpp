@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/rng.hpp"
@@ -28,7 +29,7 @@ double log_normal(const Component& c, const robot::Pose& x) {
   d(2) = wrap_angle(d(2));
   // |L^T d|^2 with H = L L^T.
   const Vec<3> v = c.factor.matrixL().transpose() * d;
-  return -1.5 * kLog2Pi + c.factor.log_det_L() - 0.5 * v.squaredNorm();
+  return gaussian_log_density(3, -c.factor.log_det_L(), v.squaredNorm());
 }
 
 }  // namespace

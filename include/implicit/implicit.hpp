@@ -20,6 +20,7 @@
 #include "implicit/core/banded.hpp"
 #include "implicit/core/block_tridiagonal.hpp"
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/implicit_sampler.hpp"

@@ -6,6 +6,7 @@
 
 #include "implicit/control/normal_tail.hpp"
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/log_weight.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/core/weights.hpp"
@@ -224,7 +225,7 @@ void DoubleSlit::path_weights(double x, int k, int s, double edge, const Eigen::
   const Eigen::VectorXd mu = minimizer_path(x, k, edge);
   // psi = Z / (2 pi sigma dt)^{n/2}: the implicit weights of exp(-F) over the path measure's
   // normaliser.
-  const double log_path_norm = 0.5 * n * (kLog2Pi + std::log(p_.sigma * p_.dt));
+  const double log_path_norm = gaussian_log_normaliser(n, 0.5 * n * std::log(p_.sigma * p_.dt));
   const int M = static_cast<int>(xi.cols());
   log_w.resize(static_cast<std::size_t>(M));
   if (delta) delta->resize(static_cast<std::size_t>(M));

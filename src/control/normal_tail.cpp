@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/types.hpp"
 
 namespace implicit::control {
@@ -21,7 +22,7 @@ double log_normal_cdf(double z) {
   return log_normal_pdf(z) - std::log(-z) + std::log(series);
 }
 
-double log_normal_pdf(double z) { return -0.5 * z * z - 0.5 * kLog2Pi; }
+double log_normal_pdf(double z) { return -0.5 * z * z - gaussian_log_normaliser(1, 0.0); }
 
 double log_normal_interval(double a, double b) {
   if (!(a < b)) return -std::numeric_limits<double>::infinity();

@@ -7,6 +7,7 @@
 #include <Eigen/Cholesky>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/newton.hpp"
@@ -208,7 +209,7 @@ EnsembleFilter::EnsembleFilter(Problem problem, FilterOptions options)
     s.residual.resize(p);
   }
   lr_ = problem_.R.llt().matrixL();
-  log_det_2pi_r_ = p * kLog2Pi + log_det(lr_);
+  log_det_2pi_r_ = 2.0 * gaussian_log_normaliser(p, 0.5 * log_det(lr_));
   if (problem_.stochastic()) lq_ = problem_.Q.llt().matrixL();
   if (options_.method == Method::kImplicit) {
     g_ = problem_.H.transpose() * problem_.R.llt().solve(problem_.H);
@@ -243,7 +244,7 @@ void EnsembleFilter::set_implicit_q(const Eigen::MatrixXd& q) {
   const int n = problem_.dim();
   const Eigen::LLT<Eigen::MatrixXd> q_llt(q);
   q_inv_ = q_llt.solve(Eigen::MatrixXd::Identity(n, n));
-  log_norm_ = 0.5 * (n * kLog2Pi + log_det(q_llt.matrixL())) + 0.5 * log_det_2pi_r_;
+  log_norm_ = gaussian_log_normaliser(n, 0.5 * log_det(q_llt.matrixL())) + 0.5 * log_det_2pi_r_;
 }
 
 void EnsembleFilter::factor_ensemble_covariance() {

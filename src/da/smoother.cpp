@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/log_weight.hpp"
 #include "implicit/core/newton.hpp"
@@ -42,8 +43,8 @@ void SmootherOptions::validate(const Problem& p) const {
 }
 
 void WindowTerms::set_log_norm() {
-  const auto n = static_cast<double>(b_lower.rows()), m = static_cast<double>(r_lower.rows());
-  log_norm = 0.5 * (n + m) * kLog2Pi + log_det_lower(b_lower) + log_det_lower(r_lower);
+  const auto n = static_cast<int>(b_lower.rows()), m = static_cast<int>(r_lower.rows());
+  log_norm = gaussian_log_normaliser(n + m, 0.0) + log_det_lower(b_lower) + log_det_lower(r_lower);
 }
 
 void prepare_scratch(const Problem& p, WindowObjective::Scratch& s) {

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 
 namespace implicit::robot {
 namespace {
@@ -95,7 +96,7 @@ double BeamModel::beam_log_density(double range, bool no_return, double expected
     return std::log(p_.z_hit * tail + p_.z_max) - log_sum_;
   }
   const double u = (range - expected) / s;
-  double l = log_weighted(p_.z_hit, -0.5 * u * u - std::log(std::sqrt(2.0 * kPi) * s));
+  double l = log_weighted(p_.z_hit, -0.5 * u * u - std::log(gaussian_normaliser(s)));
   if (range <= expected && expected > 0.0) {
     const double lambda = p_.lambda_short;
     l = log_add(l, log_weighted(p_.z_short, std::log(lambda) - lambda * range -

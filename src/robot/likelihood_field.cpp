@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "distance_field_kernels.hpp"
+#include "implicit/core/gaussian.hpp"
 
 namespace implicit::robot {
 namespace {
@@ -124,7 +125,7 @@ std::shared_ptr<const CellLogDensity> LikelihoodFieldModel::cell_log_density(dou
   auto table = std::make_shared<CellLogDensity>();
   table->z_max = z_max;
   table->owner = cell_tables_.get();
-  const BeamDensity density{std::log(p_.z_hit / (std::sqrt(2.0 * kPi) * p_.sigma_hit)), inv_var_,
+  const BeamDensity density{std::log(p_.z_hit / gaussian_normaliser(p_.sigma_hit)), inv_var_,
                             p_.z_rand / z_max};
   const std::vector<float>& distances = field_->padded_;
   table->cells.resize(distances.size());
@@ -158,7 +159,7 @@ PreparedScan LikelihoodFieldModel::prepare(const LaserScan& scan, std::string_vi
   PreparedScan z;
   z.z_max = p_.laser_max_range > 0 ? p_.laser_max_range : scan.range_max;
   const double z_min = p_.laser_min_range > 0 ? p_.laser_min_range : scan.range_min;
-  z.log_hit_scale = std::log(p_.z_hit / (std::sqrt(2.0 * kPi) * p_.sigma_hit));
+  z.log_hit_scale = std::log(p_.z_hit / gaussian_normaliser(p_.sigma_hit));
   z.rand_density = p_.z_rand / z.z_max;
   // nav2's subsampling: max_beams beams evenly spaced from the first to the last.
   const std::size_t n = scan.size();

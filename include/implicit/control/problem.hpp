@@ -18,6 +18,7 @@
 #include "implicit/control/partial_noise.hpp"
 #include "implicit/control/path_function.hpp"
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/types.hpp"
 
 namespace implicit::control {
@@ -276,11 +277,11 @@ class ControlProblem {
   double path_log_normalizer(int k) const {
     const int n = path_length(k);
     if (spec_.path_grid == PathGrid::kEveryStep)
-      return 0.5 * n * Dv * (kLog2Pi + std::log(spec_.dt)) + 0.5 * n * log_det_sigma_;
+      return gaussian_log_normaliser(n * Dv, 0.5 * n * (Dv * std::log(spec_.dt) + log_det_sigma_));
     double s = 0.5 * n * log_det_sigma_;
     const int* steps = path_steps(k);
     for (int i = 0, from = k; i < n; from = steps[i], ++i)
-      s += 0.5 * Dv * (kLog2Pi + std::log((steps[i] - from) * spec_.dt));
+      s += gaussian_log_normaliser(Dv, 0.5 * Dv * std::log((steps[i] - from) * spec_.dt));
     return s;
   }
 

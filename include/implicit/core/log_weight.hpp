@@ -18,6 +18,7 @@
 #include <cmath>
 #include <limits>
 
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/types.hpp"
 
 namespace implicit {
@@ -28,7 +29,7 @@ inline double implicit_log_weight(int m, double rho, double f_x, double log_det_
                                   double log_ray_jacobian = 0.0) {
   if (!(f_x < std::numeric_limits<double>::infinity()))  // +inf or NaN: outside the support
     return -std::numeric_limits<double>::infinity();
-  return 0.5 * static_cast<double>(m) * kLog2Pi + 0.5 * rho - f_x - log_det_L + log_ray_jacobian;
+  return gaussian_log_normaliser(m, 0.0) + 0.5 * rho - f_x - log_det_L + log_ray_jacobian;
 }
 
 /// The random map's r = (1 - m/2) log rho + (m - 1) log lambda - log|slope|, slope = grad F . d.

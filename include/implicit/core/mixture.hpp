@@ -13,6 +13,7 @@
 #include <span>
 #include <vector>
 
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/laplace.hpp"
 #include "implicit/core/target.hpp"
 #include "implicit/core/weights.hpp"
@@ -61,7 +62,8 @@ class MixtureProposal {
     for (std::size_t k = 0; k < components_.size(); ++k) {
       const auto& c = components_[k];
       const Vec<N> v = c.L.transpose() * (x - c.mu);
-      const double t = log_pi_[k] - 0.5 * m * kLog2Pi + c.log_det_L - 0.5 * v.squaredNorm();
+      const double t =
+          log_pi_[k] - gaussian_log_normaliser(m, 0.0) + c.log_det_L - 0.5 * v.squaredNorm();
       if (!(t > -std::numeric_limits<double>::infinity())) continue;  // zero density (or NaN x)
       if (t > top) {
         sum = sum * std::exp(top - t) + 1.0;

@@ -45,6 +45,7 @@
 #include <vector>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/laplace.hpp"
 #include "implicit/core/mixture.hpp"
 #include "implicit/core/parallel.hpp"
@@ -156,7 +157,7 @@ void build_objective(const robot::LandmarkDetections<Sensor>& d, std::span<const
                      MclObjective<Sensor>& obj) {
   const robot::LandmarkObservation<Sensor>& model = *d.model;
   obj.reset(model.sensor(), model.noise_information(), Pose::Zero(), Mat3::Zero(), 0.0);
-  const double per_term = kLog2Pi + 0.5 * model.log_det_noise();
+  const double per_term = gaussian_log_normaliser(2, 0.5 * model.log_det_noise());
   for (std::size_t i = 0; i < d.z.size(); ++i) {
     const int k = assoc[i];
     if (k < 0 || !obj.add(model.landmarks()[static_cast<std::size_t>(k)], d.z[i].z)) {
@@ -229,7 +230,8 @@ class WrappedMixture {
               "global localization: expected mixture components with a heading std of at most pi, "
               "got {} for component {}",
               1.0 / comps[k].L(2, 2), k);
-      t.log_norm = mix.log_mixture_weights()[k] - 1.5 * kLog2Pi + comps[k].log_det_L;
+      t.log_norm =
+          mix.log_mixture_weights()[k] - gaussian_log_normaliser(3, 0.0) + comps[k].log_det_L;
       t.reach = 1;
       while (0.5 * t.h * kPi * kPi * ((2.0 * t.reach + 1) * (2.0 * t.reach + 1) - 1.0) < 40.0)
         ++t.reach;

@@ -47,6 +47,7 @@
 #include <Eigen/Cholesky>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/resampling.hpp"
 #include "implicit/core/rng.hpp"
 #include "implicit/core/weights.hpp"
@@ -337,7 +338,8 @@ class MonteCarloLocalization {
   /// The fix multiplies the target, not the proposal: valid importance sampling.
   void weight_by(const PositionFix& fix) {
     const double info = 1.0 / (fix.std * fix.std);
-    const double norm = -kLog2Pi - 2.0 * std::log(fix.std);  // log N(0; 0, std^2 I)
+    const double norm =
+        -gaussian_log_normaliser(2, 2.0 * std::log(fix.std));  // log N(0; 0, std^2 I)
     const std::span<const robot::Pose> xs = engine_.particles();
     const std::span<double> inc = engine_.increments();
     for (std::size_t j = 0; j < xs.size(); ++j)

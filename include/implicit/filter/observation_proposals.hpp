@@ -31,6 +31,7 @@
 #include <cmath>
 #include <limits>
 
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/rng.hpp"
@@ -139,8 +140,8 @@ double defensive_sample(const Objective& obj, const NewtonMinimum<SmallFactor<3>
   // log N(x; f, Sigma1) and log N(x; mu, H^-1), with H = L L^T: xi_H = L^T (x - mu).
   const Vec<3> eta = sigma1.solve_lower(next - f);
   const Vec<3> xi_h = nr.factor.matrixL().transpose() * (next - nr.x);
-  const double log_prior = -1.5 * kLog2Pi - sigma1.log_det_L() - 0.5 * eta.squaredNorm();
-  const double log_implicit = -1.5 * kLog2Pi + nr.factor.log_det_L() - 0.5 * xi_h.squaredNorm();
+  const double log_prior = gaussian_log_density(3, sigma1.log_det_L(), eta.squaredNorm());
+  const double log_implicit = gaussian_log_density(3, -nr.factor.log_det_L(), xi_h.squaredNorm());
   const double p = std::log(a) + log_prior, q = std::log1p(-a) + log_implicit;
   const double log_q = std::max(p, q) + std::log1p(std::exp(-std::abs(p - q)));
   const double log_w = -value - log_q;
@@ -166,7 +167,7 @@ double implicit_step(const ObservationContext<Motion, Observation>& ctx, Map map
     return 0.0;
   }
   const robot::Mat3 prior_information = sigma1.inverse();
-  const double constant = 1.5 * kLog2Pi + sigma1.log_det_L();  // 1/2 log det(2 pi Sigma1)
+  const double constant = gaussian_log_normaliser(3, sigma1.log_det_L());
   PoseObjective<Observation> obj;
   obj.reset(*ctx.observation, *ctx.z, f, prior_information, constant);
   NewtonMinimum<SmallFactor<3>> nr = newton_minimize<SmallFactor<3>>(obj, f, newton);

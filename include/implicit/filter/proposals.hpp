@@ -34,6 +34,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/rng.hpp"
@@ -82,10 +83,10 @@ double landmark_implicit_step(
   const robot::LandmarkObservation<Sensor>& model = *ctx.observation;
   // Sigma1^-1 is needed as a matrix (it is the prior's Hessian); Cholesky solves give it.
   const Mat3 prior_information = sigma1.inverse();
-  const double constant = 1.5 * kLog2Pi + sigma1.log_det_L();  // 1/2 log det(2 pi Sigma1)
+  const double constant = gaussian_log_normaliser(3, sigma1.log_det_L());
   MclObjective<Sensor> obj;
   obj.reset(model.sensor(), model.noise_information(), f, prior_information, constant);
-  const double per_term = kLog2Pi + 0.5 * model.log_det_noise();  // 1/2 log det(2 pi Sigma2)
+  const double per_term = gaussian_log_normaliser(2, 0.5 * model.log_det_noise());
   const std::span<const Landmark> landmarks = model.landmarks();
   for (const LabelledMeasurement& lz : ctx.z->z) {
     const int k = lz.landmark >= 0 ? lz.landmark : model.associate(f, &sigma1_full, lz.z);

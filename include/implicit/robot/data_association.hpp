@@ -32,6 +32,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/types.hpp"
 #include "implicit/robot/types.hpp"
 
@@ -113,7 +114,7 @@ Association associate_landmark(const Sensor& sensor, const Pose& pose, const Mat
 /// log p0: the Gaussian N(0, Sigma2) log density on the gate boundary d^2 = gate.
 inline double clutter_log_density(double gate, const Mat2& sigma2) {
   const double det = sigma2(0, 0) * sigma2(1, 1) - sigma2(0, 1) * sigma2(1, 0);
-  return -0.5 * gate - kLog2Pi - 0.5 * std::log(det);
+  return -0.5 * gate - gaussian_log_normaliser(2, 0.0) - 0.5 * std::log(det);
 }
 
 }  // namespace implicit::robot

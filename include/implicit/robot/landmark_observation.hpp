@@ -32,6 +32,7 @@
 #include <Eigen/Cholesky>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/types.hpp"
 #include "implicit/robot/data_association.hpp"
 #include "implicit/robot/landmark_map.hpp"
@@ -215,7 +216,8 @@ class LandmarkObservation {
   template <typename Counts>
   double log_likelihood(const Prepared& d, const Pose& x, Counts& counts) const {
     double log_w = 0.0;
-    const double log_norm = -kLog2Pi - 0.5 * log_det_noise_;  // log N(0; 0, Sigma2)
+    const double log_norm =
+        -gaussian_log_normaliser(2, 0.5 * log_det_noise_);  // log N(0; 0, Sigma2)
     for (const LabelledMeasurement& lz : d.z) {
       const int k = lz.landmark >= 0 ? lz.landmark : associate(x, nullptr, lz.z);
       if (k < 0) {
@@ -242,7 +244,7 @@ class LandmarkObservation {
   double negative_log_likelihood(const Prepared& d, const Pose& x, Vec<3>* gradient,
                                  Mat3* gauss_newton) const {
     double value = 0.0;
-    const double per_term = kLog2Pi + 0.5 * log_det_noise_;  // 1/2 log det(2 pi Sigma2)
+    const double per_term = gaussian_log_normaliser(2, 0.5 * log_det_noise_);
     for (const LabelledMeasurement& lz : d.z) {
       const int k = lz.landmark >= 0 ? lz.landmark : associate(x, nullptr, lz.z);
       if (k < 0) {

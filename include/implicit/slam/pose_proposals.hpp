@@ -36,6 +36,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/newton.hpp"
@@ -132,7 +133,8 @@ inline PoseDraw failure(PoseDraw d) {
 }
 inline double log_normal2(const Vec<2>& e, const Eigen::LLT<Mat<2>>& llt) {
   const Mat<2> l = llt.matrixL();
-  return -kLog2Pi - std::log(l(0, 0)) - std::log(l(1, 1)) - 0.5 * e.dot(llt.solve(e));
+  return -gaussian_log_normaliser(2, std::log(l(0, 0))) - std::log(l(1, 1)) -
+         0.5 * e.dot(llt.solve(e));
 }
 }  // namespace detail
 

@@ -33,6 +33,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/gaussian_factor.hpp"
 #include "implicit/core/newton.hpp"
 #include "implicit/core/types.hpp"
@@ -116,7 +117,7 @@ bool set_pose_objective(PoseObjective<Sensor>& F, const Sensor& sensor, const Ve
   const Mat<3> l1 = sigma1_llt.matrixL();
   const Mat<2>& r = sensor.noise_covariance();
   F.reset(sensor, Mat<2>::Identity(), f, precision,
-          1.5 * kLog2Pi + l1.diagonal().array().log().sum());
+          gaussian_log_normaliser(3, l1.diagonal().array().log().sum()));
   for (const KnownLandmark& k : known) {
     Mat<2> s = r;
     if (!point_landmarks) {
@@ -128,7 +129,7 @@ bool set_pose_objective(PoseObjective<Sensor>& F, const Sensor& sensor, const Ve
     const Mat<2> l = llt.matrixL();
     const Mat<2> information = llt.solve(Mat<2>::Identity());
     F.add(k.mean, k.z, 0.5 * (information + information.transpose()));
-    F.add_constant(kLog2Pi + std::log(l(0, 0)) + std::log(l(1, 1)));  // 1/2 log det(2 pi S_i)
+    F.add_constant(gaussian_log_normaliser(2, std::log(l(0, 0))) + std::log(l(1, 1)));
   }
   return std::isfinite(F.constant());
 }
@@ -177,8 +178,8 @@ LinearizedProposal linearized_optimal_proposal(const Sensor& sensor, const Vec<3
   // det(H Sigma1 H^T + Q) = det Q det Sigma1 det Lambda; quadratic form by Woodbury.
   const double log_det = log_det_q + 2.0 * l1.diagonal().array().log().sum() +
                          2.0 * out.L.diagonal().array().log().sum();
-  out.log_weight =
-      -0.5 * (quad - b.dot(shift)) - 0.5 * log_det - static_cast<double>(known.size()) * kLog2Pi;
+  out.log_weight = -0.5 * (quad - b.dot(shift)) - 0.5 * log_det -
+                   gaussian_log_normaliser(2 * static_cast<int>(known.size()), 0.0);
   out.mean = f + shift;
   out.ok = std::isfinite(out.log_weight) && out.mean.allFinite();
   return out;
@@ -195,8 +196,8 @@ class NewLandmarkObjective {
     precision1_ = 0.5 * (precision1_ + precision1_.transpose()).eval();
     const Mat<3> l1 = llt1_.matrixL();
     const Mat<2> l2 = llt2_.matrixL();
-    constant_ = 1.5 * kLog2Pi + l1.diagonal().array().log().sum() + kLog2Pi +
-                l2.diagonal().array().log().sum();
+    constant_ = gaussian_log_normaliser(3, l1.diagonal().array().log().sum()) +
+                gaussian_log_normaliser(2, 0.0) + l2.diagonal().array().log().sum();
   }
   bool ok() const { return ok_; }
   /// 1/2 log det(2 pi Sigma1) + 1/2 log det(2 pi Sigma2).

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "implicit/core/error.hpp"
+#include "implicit/core/gaussian.hpp"
 #include "implicit/core/implicit_maps.hpp"
 #include "implicit/core/log_weight.hpp"
 
@@ -51,7 +52,7 @@ struct GridScanMatchObjective {
 double grid_log_motion_density(const robot::Pose& x, const robot::Pose& f,
                                const SmallFactor<3>& sigma1) {
   const Vec<3> eta = sigma1.solve_lower(x - f);
-  return -1.5 * kLog2Pi - sigma1.log_det_L() - 0.5 * eta.squaredNorm();
+  return gaussian_log_density(3, sigma1.log_det_L(), eta.squaredNorm());
 }
 
 // The coarse stage of coarse to fine (CoarseStartOptions): Newton on the objective make(model)
@@ -108,7 +109,7 @@ GridPoseObjective::GridPoseObjective(const GridScanModel& scan, const ScanMatchB
       beams_(&beams),
       f_(f),
       information_(sigma1.inverse()),
-      constant_(1.5 * kLog2Pi + sigma1.log_det_L()) {}
+      constant_(gaussian_log_normaliser(3, sigma1.log_det_L())) {}
 
 double GridPoseObjective::evaluate(const robot::Pose& x, Vec<3>* gradient, robot::Mat3* hessian,
                                    robot::Mat3* gauss_newton) const {
