@@ -23,7 +23,7 @@ SANITIZE_EXCLUDE ?= slow|packaging|docs
 FUZZ_SECONDS ?= 6
 
 .PHONY: all deps configure build test test-slow reproduce reproduce-quick crosscheck bench docs \
-	install format clean configure-sanitize test-sanitize fuzz-smoke
+	install format clean configure-sanitize test-sanitize fuzz-smoke docs-check
 
 all: build
 
@@ -126,6 +126,11 @@ bench: configure
 # The API reference: $(BUILD_DIR)/docs/html/index.html (Doxygen, from the public headers).
 docs: configure
 	@cmake --build $(BUILD_DIR) --target docs
+
+# Every documentation check, the slow ones too: each number a doc states beside a `numbers slow:`
+# comment is rerun with its command (some take minutes; docs/design.md, "Numbers in the docs").
+docs-check: build
+	@ctest --test-dir $(BUILD_DIR) -L docs --output-on-failure -j $(JOBS)
 
 # Installs the library, headers, CMake and pkg-config files, the CLI, the Python module, the data
 # and the plot scripts under PREFIX (see README.md, "Install").

@@ -9,6 +9,8 @@
   umbrella   implicit/implicit.hpp includes every public header
   versions   CMakeLists.txt, CITATION.cff, CHANGELOG.md and `implicit --version` name one version,
              and the changelog dates it as CITATION.cff does (not "unreleased")
+  numbers    rerun the command of one `<!-- numbers: ... -->` comment and check that the numbers
+             it lists are what the command gives and what the doc's text says (list: lists them)
 
 The conventions for authors are in docs/design.md, "Tested documentation":
   ```cpp                        a complete program: compiled, linked with implicit::implicit, run
@@ -17,11 +19,18 @@ The conventions for authors are in docs/design.md, "Tested documentation":
   ```output tolerance=1e-3      ... every number within 1e-3 * max(1, |expected|), text exactly
 The same holds for ```python blocks (run with the built package, PYTHONPATH=build/python), and a
 ```robot-log block (docs/formats.md) is run through `implicit mcl --data` and must be scored.
+A number the prose states comes with the command that gives it, in a comment the reader does not
+see (docs/design.md, "Numbers in the docs"):
+  <!-- numbers: implicit mcl --init global --runs 20 --json
+  global_success_rate 1.0
+  particles_mean 1834
+  -->
 """
 import argparse
 import json
 import pathlib
 import re
+import shlex
 import subprocess
 import sys
 
@@ -255,6 +264,141 @@ def versions(args):
     return 0 if consistent and None not in found.values() and len(set(found.values())) == 1 else 1
 
 
+# <!-- numbers: COMMAND  or  <!-- numbers slow: COMMAND (run by `make docs-check`, not `make test`)
+NUMBERS_OPEN = re.compile(r"^<!--\s*numbers(\s+slow)?:\s*(.+?)\s*$")
+CLAIM = re.compile(r"^\s*([A-Za-z_][\w.\[\]]*)\s+(\S+)\s*$")
+
+
+def stated_text(lines, after, command):
+    """The text a comment ending on line index `after` speaks for: the next paragraph or table
+    (further numbers comments skipped). In a table whose row quotes the command (without --json),
+    only that row, less the command."""
+    i = after + 1
+    while i < len(lines):
+        if NUMBERS_OPEN.match(lines[i]):
+            while i < len(lines) and lines[i].strip() != "-->":
+                i += 1
+            i += 1
+        elif not lines[i].strip():
+            i += 1
+        else:
+            break
+    block = []
+    while i < len(lines) and lines[i].strip() and not NUMBERS_OPEN.match(lines[i]):
+        block.append(lines[i])
+        i += 1
+    quoted = re.sub(r"\s+--json\b", "", command).strip()
+    # The row's own command is not a statement of its numbers (`-N 100` is not a result of 100).
+    rows = [b.replace(quoted, "") for b in block if b.lstrip().startswith("|") and quoted in b]
+    return "\n".join(rows or block)
+
+
+def numbers_comments(path):
+    """Yields (line, slow, command, [(key, text)], problems) for every numbers comment."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    i, fence = 0, None
+    while i < len(lines):
+        f = FENCE.match(lines[i])
+        if f and (fence is None or lines[i].startswith(fence)):
+            fence = f.group(1) if fence is None else None  # an example in a code block: not one
+        m = NUMBERS_OPEN.match(lines[i]) if fence is None else None
+        if not m:
+            i += 1
+            continue
+        start, claims, problems = i + 1, [], []
+        i += 1
+        while i < len(lines) and lines[i].strip() != "-->":
+            c = CLAIM.match(lines[i])
+            if c and re.fullmatch(r"-?\d+(\.\d+)?", c.group(2)):
+                claims.append((c.group(1), c.group(2)))
+            else:
+                problems.append(f"{path}:{i + 1}: expected 'KEY NUMBER' (a JSON key and the number "
+                                f"as the text writes it, e.g. 0.303), got '{lines[i].strip()}'")
+            i += 1
+        if i == len(lines):
+            problems.append(f"{path}:{start}: the numbers comment has no closing '-->' line")
+        text = stated_text(lines, i, m.group(2))
+        for key, written in claims:
+            if not re.search(r"(?<![\d.])" + re.escape(written) + r"(?![\d])", text):
+                problems.append(f"{path}:{start}: '{key} {written}': the paragraph or table row "
+                                f"below the comment does not state {written}")
+        if not claims:
+            problems.append(f"{path}:{start}: the numbers comment lists no number")
+        yield start, bool(m.group(1)), m.group(2), claims, problems
+        i += 1
+
+
+def json_value(report, key):
+    """report['a']['b'][0] for the key a.b[0]; None when there is no such value."""
+    value = report
+    for part in re.findall(r"[^.\[\]]+|\[\d+\]", key):
+        if part.startswith("["):
+            index = int(part[1:-1])
+            value = value[index] if isinstance(value, list) and index < len(value) else None
+        else:
+            value = value.get(part) if isinstance(value, dict) else None
+        if value is None:
+            return None
+    return value
+
+
+def as_written(value, written):
+    """value rounded as the doc writes `written`: the same number of decimals."""
+    decimals = len(written.split(".", 1)[1]) if "." in written else 0
+    return f"{value:.{decimals}f}"
+
+
+def numbers(args):
+    root = pathlib.Path(args.root)
+    if args.list:
+        for doc in args.docs:
+            path = pathlib.Path(doc)
+            origin = path.resolve().relative_to(root.resolve()).as_posix()
+            for line, slow, _, _, _ in numbers_comments(path):
+                print(f"{origin}:{line}|{'slow' if slow else 'fast'}")
+        return 0
+    doc, line = args.at.rsplit(":", 1)
+    path = root / doc
+    for start, _, command, claims, problems in numbers_comments(path):
+        if start != int(line):
+            continue
+        if problems:
+            print("\n".join(problems))
+            return 1
+        argv = shlex.split(command)
+        if argv[0] == "implicit":
+            if not args.cli:
+                print(f"{args.at}: the command needs the implicit tool, which this build has not")
+                return 1
+            argv[0] = args.cli
+        result = subprocess.run(argv, capture_output=True, text=True, timeout=args.timeout,
+                                cwd=root)
+        if result.returncode != 0:
+            print(f"{args.at}: '{command}' exited with {result.returncode}:\n{result.stderr}")
+            return 1
+        try:
+            report = json.loads(result.stdout)
+        except json.JSONDecodeError as e:
+            print(f"{args.at}: '{command}' printed no JSON ({e}); a numbers comment's command "
+                  f"must print JSON (add --json)")
+            return 1
+        wrong = 0
+        for key, written in claims:
+            value = json_value(report, key)
+            if not isinstance(value, (int, float)) or isinstance(value, bool):
+                print(f"{args.at}: '{command}' gives no number '{key}' (got {value!r})")
+                wrong += 1
+            elif as_written(value, written) != written:
+                print(f"{args.at}: the doc says {key} = {written}, '{command}' gives {value!r} "
+                      f"({as_written(value, written)} as the doc writes it)")
+                wrong += 1
+            else:
+                print(f"{args.at}: {key} = {written} ok")
+        return 1 if wrong else 0
+    print(f"{args.at}: no numbers comment starts on that line")
+    return 1
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command_name", required=True)
@@ -271,6 +415,14 @@ def main():
     p.add_argument("--positive", action="append", default=[], metavar="KEY",
                    help="the program prints JSON whose number KEY must be > 0 (repeatable)")
     p.add_argument("command", nargs="+")
+    p = sub.add_parser("numbers")
+    p.add_argument("--root", required=True)
+    p.add_argument("--cli", default="", help="the implicit executable the commands name")
+    p.add_argument("--timeout", type=float, default=3600.0)
+    p.add_argument("--list", action="store_true",
+                   help="list the comments of the docs as FILE:LINE|fast or |slow")
+    p.add_argument("--at", default="", help="FILE:LINE of the comment to check")
+    p.add_argument("docs", nargs="*")
     for name in ("citations", "umbrella", "versions"):
         p = sub.add_parser(name)
         p.add_argument("--root", required=True)
@@ -278,8 +430,8 @@ def main():
     args = parser.parse_args()
     if args.command_name == "extract":
         return extract(args) or 0
-    return {"run": run, "citations": citations, "umbrella": umbrella,
-            "versions": versions}[args.command_name](args)
+    return {"run": run, "citations": citations, "umbrella": umbrella, "versions": versions,
+            "numbers": numbers}[args.command_name](args)
 
 
 if __name__ == "__main__":
