@@ -8,6 +8,7 @@
 #include "cmd_mcl_laser.hpp"
 #include "context.hpp"
 #include "experiments.hpp"
+#include "experiments/motion_models.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/robot/bag.hpp"
 #include "nav2_params.hpp"
@@ -150,14 +151,16 @@ void run_mcl_command(MclCommand& cmd, CLI::App& sub, const CLI::Option* sensor) 
     return;
   }
   // Configs A and B are the Car Park's two noise settings of the Ute; another log says which
-  // log and model it ran with (a unicycle has no config).
+  // log and model it ran with (a model without the Car Park's noise has no config).
   const std::string& data = cmd.settings.data_dir;
   const std::string model = r["model"].get<std::string>();
   const std::string setting =
       data.empty() || std::filesystem::is_directory(data)
           ? fmt::format("config {}", r["config"].get<std::string>())
           : fmt::format("log {}, {} model{}", data, model,
-                        model == "ute" ? ", config " + r["config"].get<std::string>() : "");
+                        experiments::motion_model(model, "mcl --model").car_park_noise
+                            ? ", config " + r["config"].get<std::string>()
+                            : "");
   fmt::print(
       "MCL {} M = {}, {}, {}:\n"
       "  err% = {:.2f} ± {:.2f} (median {:.2f}), RMSE {:.3f} m, heading RMSE {:.4f} rad\n"
@@ -222,12 +225,13 @@ void setup_mcl(CLI::App& sub) {
       ->check(in_range(1, 10000000))
       ->capture_default_str();
   sub.add_option("--model", cmd->settings.model,
-                 "The robot: ute or unicycle; default: the vehicle the log declares (ute when it "
-                 "declares none). A log declaring another vehicle is refused (exit 1)")
-      ->check(CLI::IsMember({"ute", "unicycle"}));
+                 "The robot: " + experiments::motion_model_choices() +
+                     "; default: the vehicle the log declares (ute when it declares none). A log "
+                     "declaring another vehicle is refused (exit 1)")
+      ->check(CLI::IsMember(experiments::motion_model_names()));
   sub.add_option("--control-sd", cmd->settings.control_sd,
-                 "Motion noise: sd of u1 u2 (ute: speed [m/s], steering [rad], overrides --p; "
-                 "unicycle: v [m/s], omega [rad/s], default 0.1 0.05)")
+                 "Motion noise: sd of u1 u2 (" + experiments::motion_noise_help() +
+                     "; for the ute it overrides --p)")
       ->expected(2)
       ->check(in_range(0.0, 100.0));
   sub.add_option("--state-sd", cmd->settings.state_sd,

@@ -7,7 +7,7 @@
 
 #include "cmd_simulate_laser.hpp"
 #include "context.hpp"
-#include "experiments/vehicle.hpp"
+#include "experiments/motion_models.hpp"
 #include "implicit/core/error.hpp"
 #include "implicit/robot/simulate.hpp"
 #include "registry.hpp"
@@ -27,8 +27,8 @@ struct SimulateCommand {
 };
 
 template <typename Motion>
-robot::RobotLog simulate(const SimulateCommand& c, const Motion& motion, double speed,
-                         bool unicycle) {
+robot::RobotLog simulate(const SimulateCommand& c, const Motion& motion,
+                         const robot::Driver& driver) {
   const robot::RangeBearingSensor sensor =
       c.range_sd > 0 || c.bearing_sd_deg > 0
           ? robot::RangeBearingSensor::from_std(c.range_sd > 0 ? c.range_sd : std::sqrt(0.05),
@@ -36,16 +36,14 @@ robot::RobotLog simulate(const SimulateCommand& c, const Motion& motion, double 
                                                     ? c.bearing_sd_deg * kPi / 180.0
                                                     : std::sqrt(0.05 * kPi / 180.0))
           : robot::RangeBearingSensor();
-  return robot::simulate_robot_log(
-      motion, sensor, robot::square_route_driver(speed, c.options.route_side, unicycle), c.options,
-      c.ctx.seed);
+  return robot::simulate_robot_log(motion, sensor, driver, c.options, c.ctx.seed);
 }
 
 void setup_simulate(CLI::App& sub) {
   auto cmd = std::make_shared<SimulateCommand>();
   auto& c = *cmd;
-  sub.add_option("--model", c.model, "The robot: ute (the paper's car) or unicycle")
-      ->check(CLI::IsMember({"ute", "unicycle"}))
+  sub.add_option("--model", c.model, "The robot: " + experiments::motion_model_choices())
+      ->check(CLI::IsMember(experiments::motion_model_names()))
       ->capture_default_str();
   add_common_options(sub, c.ctx);
   sub.get_option("--out")->description("The log FILE to write (gzip when it ends in .gz)");
@@ -60,8 +58,7 @@ void setup_simulate(CLI::App& sub) {
       ->check(in_range(1, 100000))
       ->capture_default_str();
   sub.add_option("--control-sd", c.noise.control_sd,
-                 "Motion noise: sd of u1 and u2 (ute: speed [m/s], steering [rad]; unicycle: v "
-                 "[m/s], omega [rad/s]); default: the model's")
+                 "Motion noise: sd of u1 and u2 (" + experiments::motion_noise_help() + ")")
       ->expected(2)
       ->check(in_range(0.0, 100.0));
   sub.add_option("--state-sd", c.noise.state_sd,
@@ -94,17 +91,18 @@ void setup_simulate(CLI::App& sub) {
                            c.ctx);
       return;
     }
-    const robot::RobotLog none;  // no declaration: the parameters come from the flags alone
-    robot::RobotLog log;
-    if (c.model == "unicycle") {
-      const robot::UnicycleParams p = experiments::unicycle_params(none, c.noise);
-      log = simulate(c, robot::UnicycleModel(p), 1.0, true);
-      log.vehicle = robot::declare_vehicle(p);
-    } else {
-      const robot::UteParams p = experiments::ute_params(none, c.noise);
-      log = simulate(c, robot::UteModel(p), 3.0, false);
-      log.vehicle = robot::declare_vehicle(p);
-    }
+    // No declaration: the model's defaults, then the noise flags.
+    const experiments::MotionModelEntry& entry =
+        experiments::motion_model(c.model, "simulate --model");
+    const robot::VehicleDeclaration declared = experiments::full_declaration(entry, {});
+    const robot::AnyMotionModel model = experiments::make_motion_model(entry, declared, c.noise);
+    const robot::Driver driver =
+        entry.route_driver
+            ? entry.route_driver(entry.route_speed, c.options.route_side)
+            : robot::square_route_driver(entry.route_speed, c.options.route_side, true);
+    robot::RobotLog log = experiments::visit_motion_model(
+        model, [&](const auto& motion) { return simulate(c, motion, driver); });
+    log.vehicle = declared;
     const std::string out = c.ctx.out_dir.string();
     try {
       robot::write_robot_log(out, log);
@@ -132,7 +130,8 @@ void setup_simulate(CLI::App& sub) {
 }
 
 const Registrar register_simulate{
-    "simulate", "A synthetic robot log (ute or unicycle) for mcl and slam", setup_simulate};
+    "simulate", "A synthetic robot log (any motion model the tool knows) for mcl and slam",
+    setup_simulate};
 
 }  // namespace
 }  // namespace implicit::app

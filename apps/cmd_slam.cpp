@@ -7,6 +7,7 @@
 #include "cmd_slam_laser.hpp"
 #include "context.hpp"
 #include "experiments.hpp"
+#include "experiments/motion_models.hpp"
 #include "implicit/core/parallel.hpp"
 #include "plural.hpp"
 #include "registry.hpp"
@@ -142,12 +143,13 @@ void setup_slam(CLI::App& sub) {
                "Exit 0 even when the run scored nothing (no step with truth, no landmark, a "
                "non-finite metric); a warning is printed either way");
   sub.add_option("--model", s.model,
-                 "The robot: ute or unicycle; default: the vehicle the log declares (ute when it "
-                 "declares none). A log declaring another vehicle is refused (exit 1)")
-      ->check(CLI::IsMember({"ute", "unicycle"}));
+                 "The robot: " + experiments::motion_model_choices() +
+                     "; default: the vehicle the log declares (ute when it declares none). A log "
+                     "declaring another vehicle is refused (exit 1)")
+      ->check(CLI::IsMember(experiments::motion_model_names()));
   sub.add_option("--control-sd", s.control_sd,
-                 "Motion noise: sd of u1 u2 (ute: speed [m/s], steering [rad], overrides "
-                 "--control-noise; unicycle: v [m/s], omega [rad/s], default 0.1 0.05)")
+                 "Motion noise: sd of u1 u2 (" + experiments::motion_noise_help() +
+                     "; for the ute it overrides --control-noise)")
       ->expected(2)
       ->check(in_range(0.0, 100.0));
   sub.add_option("--state-sd", s.state_sd,

@@ -17,6 +17,7 @@
 
 #include "experiments/landmark_mcl.hpp"
 #include "experiments/landmark_mcl_global.hpp"
+#include "experiments/motion_models.hpp"
 #include "experiments/parallel_runs.hpp"
 #include "experiments/run_statistics.hpp"
 #include "experiments/tum_output.hpp"
@@ -144,7 +145,8 @@ void write_trajectory(const std::filesystem::path& file, const LocalizationProbl
 struct MclSetup {
   robot::RobotLog log;
   std::string model_name;
-  double p = 0.0;  ///< the Ute's control std (both entries), for the "p" key
+  double p = 0.0;     ///< the Ute's control std (both entries), for the "p" key
+  MotionNoise noise;  ///< the motion noise the filter used, defaults filled in
   std::chrono::steady_clock::time_point start;
 };
 
@@ -212,28 +214,31 @@ nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
       "mcl", s.model, setup.log.vehicle ? std::optional(setup.log.vehicle->model) : std::nullopt,
       data_name);
   const bool assumed = !setup.log.vehicle;  // the Car Park folders declare the Ute
-  const MotionNoise noise{s.control_sd, s.state_sd};
   const robot::RangeBearingSensor sensor = mcl_sensor(s);
-  nlohmann::json j;
-  if (setup.model_name == "unicycle") {
+  const MotionModelEntry& entry = motion_model(setup.model_name, "mcl --model");
+  MotionNoise noise{s.control_sd, s.state_sd};
+  if (entry.car_park_noise) {
+    // Models (spec §3.1, §3.2, §3.9): config A is the paper's P = 0.5, config B P = 0.1; --p and
+    // --q set P and Q's position entries, and --control-sd / --state-sd override both.
+    const double p = s.p >= 0 ? s.p : (s.config == NoiseConfig::kA ? 0.5 : 0.1);
+    if (noise.control_sd.empty()) noise.control_sd = {p, p};
+    if (noise.state_sd.empty() && s.q >= 0)
+      noise.state_sd = {s.q, s.q, entry.default_noise.state_sd.at(2)};
+    setup.p = noise.control_sd[0];
+  } else {
     require(s.truth == MclTruth::kGps,
             "mcl --truth reference: the GPS-aided reference run is the Car Park's (--model ute), "
-            "got --model unicycle");
-    const robot::UnicycleParams up = unicycle_params(setup.log, noise);
-    if (assumed) warn_vehicle_assumed("mcl", data_name, robot::declare_vehicle(up));
-    j = run_mcl_model(s, ctx, robot::UnicycleModel(up), sensor, setup);
-    j["vehicle_assumed"] = assumed;
-    return j;
+            "got --model {}",
+            setup.model_name);
   }
-  // Models (spec §3.1, §3.2, §3.9): config A is the paper's P = 0.5, config B P = 0.1.
-  robot::UteParams params;
-  setup.p = s.p >= 0 ? s.p : (s.config == NoiseConfig::kA ? 0.5 : 0.1);
-  params.control_std = Vec<2>(setup.p, setup.p);
-  if (s.q >= 0) params.state_std.head<2>() = Vec<2>(s.q, s.q);
-  params = ute_params(setup.log, noise, params);
-  if (assumed) warn_vehicle_assumed("mcl", data_name, robot::declare_vehicle(params));
-  setup.p = params.control_std(0);
-  j = run_mcl_model(s, ctx, robot::UteModel(params), sensor, setup);
+  const robot::VehicleDeclaration declared =
+      full_declaration(entry, setup.log.vehicle ? *setup.log.vehicle : robot::VehicleDeclaration{});
+  if (assumed) warn_vehicle_assumed("mcl", data_name, declared);
+  setup.noise = noise_with_defaults(entry, noise);
+  const robot::AnyMotionModel model = make_motion_model(entry, declared, setup.noise);
+  nlohmann::json j = visit_motion_model(
+      model, [&](const auto& motion) { return run_mcl_model(s, ctx, motion, sensor, setup); });
+  j["model"] = setup.model_name;  // the global and kidnapping runs' JSON too
   j["vehicle_assumed"] = assumed;
   return j;
 }
@@ -533,10 +538,9 @@ nlohmann::json run_mcl_model(const MclSettings& s, const RunContext& ctx, const 
   j["config"] = name_of(s.config);
   j["model"] = setup.model_name;
   j["p"] = setup.p;
-  j["q"] = model.params().state_std(0);
-  j["control_sd"] = {model.params().control_std(0), model.params().control_std(1)};
-  j["state_sd"] = {model.params().state_std(0), model.params().state_std(1),
-                   model.params().state_std(2)};
+  j["q"] = setup.noise.state_sd.at(0);
+  j["control_sd"] = setup.noise.control_sd;
+  j["state_sd"] = setup.noise.state_sd;
   j["sigma2"] = name_of(s.sigma2);
   j["clutter"] = s.clutter;
   j["seed"] = ctx.seed;

@@ -42,11 +42,11 @@ struct MclSettings {
   MclTruth truth = MclTruth::kGps;  ///< ground truth: GPS, or a GPS-aided MCL run
   double gps_std = 0.5;             ///< [m] GPS std assumed by the reference run
   int reference_particles = 5000;   ///< particles of the reference run
-  std::string model;                ///< "ute" | "unicycle"; empty: what the log declares
-  std::vector<double> control_sd;   ///< motion noise sd of u1, u2 (overrides p); empty: default
-  std::vector<double> state_sd;     ///< motion noise sd of x, y, heading; empty: default
-  double range_sd = 0.0;            ///< sensor range sd [m]; 0: Table 7 per --sigma2
-  double bearing_sd_deg = 0.0;      ///< sensor bearing sd [deg]; 0: Table 7 per --sigma2
+  std::string model;  ///< a motion model by name (motion_models.hpp); empty: what the log declares
+  std::vector<double> control_sd;  ///< motion noise sd of u1, u2 (overrides p); empty: default
+  std::vector<double> state_sd;    ///< motion noise sd of x, y, heading; empty: default
+  double range_sd = 0.0;           ///< sensor range sd [m]; 0: Table 7 per --sigma2
+  double bearing_sd_deg = 0.0;     ///< sensor bearing sd [deg]; 0: Table 7 per --sigma2
   // Global localization, kidnapping, recovery and KLD-sampling (spec §3.11).
   std::string init = "known";     ///< "known" (the log's initial pose) or "global"
   double start_span = 60.0;       ///< [s] global starts: run r starts r * span / runs in

@@ -274,4 +274,11 @@ nlohmann::json run_mcl_global(const MclSettings& s, const RunContext& ctx,
   return run_global(s, ctx, model, sensor, problem);
 }
 
+nlohmann::json run_mcl_global(const MclSettings& s, const RunContext& ctx,
+                              const robot::AnyMotionModel& model,
+                              const robot::RangeBearingSensor& sensor,
+                              const filter::LocalizationProblem& problem) {
+  return run_global(s, ctx, model, sensor, problem);
+}
+
 }  // namespace implicit::experiments

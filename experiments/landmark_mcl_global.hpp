@@ -4,6 +4,7 @@
 
 #include "experiments/landmark_mcl.hpp"
 #include "implicit/filter/localization.hpp"
+#include "implicit/robot/any_motion_model.hpp"
 #include "implicit/robot/unicycle_model.hpp"
 #include "implicit/robot/ute_model.hpp"
 
@@ -24,6 +25,11 @@ nlohmann::json run_mcl_global(const MclSettings& s, const RunContext& ctx,
                               const filter::LocalizationProblem& problem);
 nlohmann::json run_mcl_global(const MclSettings& s, const RunContext& ctx,
                               const robot::UnicycleModel& model,
+                              const robot::RangeBearingSensor& sensor,
+                              const filter::LocalizationProblem& problem);
+/// Any other registered model (experiments/motion_models.hpp), through its indirect calls.
+nlohmann::json run_mcl_global(const MclSettings& s, const RunContext& ctx,
+                              const robot::AnyMotionModel& model,
                               const robot::RangeBearingSensor& sensor,
                               const filter::LocalizationProblem& problem);
 

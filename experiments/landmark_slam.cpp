@@ -18,6 +18,7 @@
 #include <fmt/ranges.h>
 
 #include "experiments/landmark_slam.hpp"
+#include "experiments/motion_models.hpp"
 #include "experiments/parallel_runs.hpp"
 #include "experiments/tum_output.hpp"
 #include "experiments/vehicle.hpp"
@@ -257,6 +258,19 @@ struct SlamData {
   bool vehicle_assumed = false;  ///< a log declared no vehicle
 };
 
+/// The declaration data set d runs with: its own `vehicle` record, else (the Car Park's folders,
+/// a log that declares none) the geometry it was read with, keeping the keys the model has.
+robot::VehicleDeclaration dataset_declaration(const MotionModelEntry& entry,
+                                              const slam::SlamDataset& d) {
+  if (!d.vehicle_parameters.empty())
+    return full_declaration(entry, {entry.name, d.vehicle_parameters});
+  const robot::VehicleDeclaration geometry = robot::declare_vehicle(d.vehicle);
+  robot::VehicleDeclaration kept{entry.name, {}};
+  for (const VehicleKey& k : entry.keys)
+    if (const auto v = geometry.parameter(k.name)) kept.parameters.emplace_back(k.name, *v);
+  return full_declaration(entry, kept);
+}
+
 /// Resolves the vehicle model of the logs (one for all) and checks what the data allow.
 void resolve_log_model(const SlamSettings& s, SlamData& data) {
   for (std::size_t k = 0; k < data.logs.size(); ++k) {
@@ -276,7 +290,7 @@ SlamData load_slam_data(const SlamSettings& s, const RunContext& ctx) {
     data.logs = load_logs(s.data_dir);
     resolve_log_model(s, data);
   } else {
-    require(s.model.empty() || s.model == "ute",
+    require(s.model.empty() || s.model == data.model,
             "slam --model {}: the synthetic data are the Car Park's Ute; give a log of that "
             "vehicle with --data (implicit simulate --model {} writes one)",
             s.model, s.model);
@@ -285,20 +299,18 @@ SlamData load_slam_data(const SlamSettings& s, const RunContext& ctx) {
       data.scenario =
           slam::make_dense_scenario(data.scenario, s.dense_laps, s.dense_landmarks, ctx.seed);
   }
-  // --control-noise is the Ute's P: on a unicycle it would be ignored, so it is refused there.
-  require(data.model != "unicycle" || s.control_noise == SlamSettings{}.control_noise,
-          "--control-noise {}: that is the Ute's control noise P = diag(p, p); the unicycle's is "
-          "--control-sd V OMEGA (sd of v [m/s] and omega [rad/s])",
-          s.control_noise);
+  // --control-noise is the Ute's P: on another robot it would be ignored, so it is refused there.
+  const MotionModelEntry& entry = motion_model(data.model, "slam --model");
+  require(entry.car_park_noise || s.control_noise == SlamSettings{}.control_noise,
+          "--control-noise {}: that is the Ute's control noise P = diag(p, p); the {}'s is "
+          "--control-sd U1 U2 (sd of {})",
+          s.control_noise, data.model, entry.controls);
   // Logs that declare no vehicle (neither record nor `# vehicle` comment) run as the Car Park's
   // Ute (or the --model given, with its defaults): said loudly, and recorded in the JSON.
   for (const auto& d : data.logs) {
     if (!d.vehicle_assumed) continue;
     data.vehicle_assumed = true;
-    warn_vehicle_assumed("slam", d.name,
-                         data.model == "ute"
-                             ? robot::declare_vehicle(d.vehicle)
-                             : robot::VehicleDeclaration{data.model, {{"dt", d.vehicle.dt}}});
+    warn_vehicle_assumed("slam", d.name, dataset_declaration(entry, d));
   }
   for (const auto& d : data.logs)
     if (d.detections_unscheduled > 0) {
@@ -317,8 +329,8 @@ SlamData load_slam_data(const SlamSettings& s, const RunContext& ctx) {
   return data;
 }
 
-/// Run i's filter options: `base` with its seed and the data set's vehicle (and, for the
-/// unicycle, its motion model).
+/// Run i's filter options: `base` with its seed and the data set's vehicle (and, for a robot
+/// other than the Ute, its motion model from the registry).
 slam::SlamOptions run_options(const slam::SlamOptions& base, const slam::SlamDataset& d,
                               const std::string& model, const MotionNoise& noise,
                               std::uint64_t seed) {
@@ -329,11 +341,9 @@ slam::SlamOptions run_options(const slam::SlamOptions& base, const slam::SlamDat
   opt.motion.encoder_offset = d.vehicle.encoder_offset;
   opt.motion.laser_forward = d.vehicle.laser_forward;
   opt.motion.laser_left = d.vehicle.laser_left;
-  if (model == "unicycle") {
-    robot::UnicycleParams p;
-    p.dt = d.vehicle.dt;
-    opt.model = robot::UnicycleModel(unicycle_params(robot::RobotLog{}, noise, p));
-  }
+  const MotionModelEntry& entry = motion_model(model, "slam --model");
+  if (!entry.car_park_noise)
+    opt.model = make_motion_model(entry, dataset_declaration(entry, d), noise);
   return opt;
 }
 
@@ -389,12 +399,10 @@ SlamColumns columns_of(const std::vector<RunSummary>& runs) {
 /// laser model.
 void add_model_json(nlohmann::json& j, const SlamSettings& s, const std::string& model,
                     const slam::SlamOptions& base) {
-  if (model == "unicycle") {
-    const robot::UnicycleParams up =
-        unicycle_params(robot::RobotLog{}, MotionNoise{s.control_sd, s.state_sd}, {});
+  if (const MotionModelEntry& entry = motion_model(model, "slam --model"); !entry.car_park_noise) {
     j["control_noise"] = nullptr;
-    j["control_sd"] = {up.control_std(0), up.control_std(1)};
-    j["state_sd"] = {up.state_std(0), up.state_std(1), up.state_std(2)};
+    j["control_sd"] = s.control_sd.empty() ? entry.default_noise.control_sd : s.control_sd;
+    j["state_sd"] = s.state_sd.empty() ? entry.default_noise.state_sd : s.state_sd;
   } else {
     j["control_noise"] = s.control_noise;
     j["control_sd"] = {base.motion.control_std(0), base.motion.control_std(1)};

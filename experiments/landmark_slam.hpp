@@ -44,12 +44,12 @@ struct SlamSettings {
   double bearing_sd_deg = 0.0;        ///< sd of the bearing noise [deg]
   double gate_chi2 = 0.0;             ///< ML gate on d^2
   double new_landmark_density = 0.0;  ///< p0 [1/(m rad)]
-  std::string model;                  ///< "ute" | "unicycle"; empty: what the log declares
-  std::vector<double> control_sd;     ///< motion noise sd of u1, u2 (overrides control_noise)
-  std::vector<double> state_sd;       ///< motion noise sd of x, y, heading; empty: default
-  std::string trajectory;             ///< TUM file of run 0's path (empty: none)
-  std::string truth_trajectory;       ///< TUM file of data set 0's truth, where known
-  std::string g2o;                    ///< g2o file of run 0's pose graph and map (empty: none)
+  std::string model;  ///< a motion model by name (motion_models.hpp); empty: what the log declares
+  std::vector<double> control_sd;  ///< motion noise sd of u1, u2 (overrides control_noise)
+  std::vector<double> state_sd;    ///< motion noise sd of x, y, heading; empty: default
+  std::string trajectory;          ///< TUM file of run 0's path (empty: none)
+  std::string truth_trajectory;    ///< TUM file of data set 0's truth, where known
+  std::string g2o;                 ///< g2o file of run 0's pose graph and map (empty: none)
 };
 /// One data set's run of run_slam: its metrics and the filter's statistics; the path and map only
 /// for run 0 (the CSV files), the NEES per step only with the consistent truth (the band).

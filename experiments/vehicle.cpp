@@ -4,16 +4,17 @@
 
 #include <fmt/format.h>
 
+#include "experiments/motion_models.hpp"
 #include "experiments/plural.hpp"
 #include "implicit/core/error.hpp"
 
 namespace implicit::experiments {
 namespace {
 
-/// What the two controls of each model mean, for the mismatch message.
-const char* controls_of(const std::string& model) {
-  if (model == "ute") return "u1 = axle speed [m/s], u2 = steering angle [rad]";
-  if (model == "unicycle") return "u1 = v [m/s], u2 = omega [rad/s]";
+/// What the two controls of a model mean, for the mismatch message.
+std::string controls_of(const std::string& model) {
+  for (const auto& e : motion_models())
+    if (e.name == model) return e.controls;
   return "unknown to this program";
 }
 
@@ -39,12 +40,19 @@ Params with_noise(Params p, const MotionNoise& noise) {
 std::string resolve_model(const std::string& command, const std::string& flag,
                           const std::optional<std::string>& declared,
                           const std::string& data_name) {
-  require(flag.empty() || flag == "ute" || flag == "unicycle",
-          "{} --model: expected 'ute' or 'unicycle', got '{}'", command, flag);
+  if (!flag.empty()) (void)motion_model(flag, command + " --model");
   if (!declared) return flag.empty() ? "ute" : flag;
-  require(*declared == "ute" || *declared == "unicycle",
-          "{}: the log '{}' declares vehicle '{}'; this program runs 'ute' or 'unicycle'", command,
-          data_name, *declared);
+  bool known = false;
+  for (const auto& e : motion_models()) known = known || e.name == *declared;
+  if (!known) {
+    std::string names;
+    for (const auto& n : motion_model_names()) names += (names.empty() ? "'" : ", '") + n + "'";
+    throw InvalidArgument(fmt::format(
+        "{}: the log '{}' declares vehicle '{}'; this program runs {} (a new one is registered "
+        "in experiments/motion_models.hpp, or from Python with "
+        "implicit.models.register_motion_model)",
+        command, data_name, *declared, names));
+  }
   require(flag.empty() || flag == *declared,
           "{} --model {}: the log '{}' declares vehicle '{}' (controls: {}), not '{}' (controls: "
           "{}); run with --model {}",
@@ -60,10 +68,10 @@ void warn_vehicle_assumed(const std::string& command, const std::string& data_na
     parameters += fmt::format("{}{}={}", parameters.empty() ? "" : " ", key, value);
   fmt::print(stderr,
              "implicit {}: warning: the log '{}' declares no vehicle (no 'vehicle' record): it "
-             "runs as the {} with {}{}; add a 'vehicle' record (docs/formats.md) if another "
+             "runs as the {} with {}, {}; add a 'vehicle' record (docs/formats.md) if another "
              "robot drove it\n",
              command, data_name, used.model, parameters,
-             used.model == "ute" ? ", the Car Park's car" : "");
+             motion_model(used.model, command + " --model").description);
 }
 
 void warn_skipped_scans(const std::string& command, const std::string& data_name,

@@ -11,8 +11,8 @@
 
 namespace implicit::experiments {
 
-/// The model to run: `flag` ("ute", "unicycle" or empty) checked against the model the data
-/// declare. Empty flag: the declared model, "ute" for data that declare none (the Car Park
+/// The model to run: `flag` (a registered model's name, or empty) checked against the model the
+/// data declare. Empty flag: the declared model, "ute" for data that declare none (the Car Park
 /// convention). Throws InvalidArgument (exit 1) naming the command, the data and both models on
 /// a mismatch.
 std::string resolve_model(const std::string& command, const std::string& flag,

@@ -26,7 +26,9 @@ def run(method="implicit", particles=100, runs=20, seed=1, data=None, config="A"
     folder or robot log (None: the bundled Car Park data); config "A" (P = 0.5) or "B" (P =
     0.1); p, q noise overrides; map "linear" or "random"; range_sd [m] and bearing_sd_deg [deg]
     (--range-sd, --bearing-sd; bearing_sd, the same in degrees, is deprecated); out a folder
-    for the CSV files (None: none written); threads 0 = all cores. Localization without a known
+    for the CSV files (None: none written); threads 0 = all cores; model a motion model by name
+    (None: the one the log declares; implicit.models.motion_models() lists them, and
+    implicit.models.register_motion_model adds your own). Localization without a known
     start (user guide §9, spec §3.11): init "known" or "global", start_span and duration [s],
     kidnap_at [s] (None: no kidnapping) and kidnap_skip [s], recovery "auto", "none", "uniform"
     or "mixture" with recovery_alpha_slow, recovery_alpha_fast and kidnap_probability, kld with

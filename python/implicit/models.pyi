@@ -1,4 +1,4 @@
-from typing import Optional
+from typing import Any, Callable, Optional
 
 import numpy as np
 import numpy.typing as npt
@@ -33,3 +33,14 @@ class RangeBearing:
     @property
     def noise_covariance(self) -> np.ndarray: ...
     def predict(self, x: npt.ArrayLike, landmark: npt.ArrayLike) -> np.ndarray: ...
+
+def register_motion_model(
+    name: str,
+    predict: Callable[[np.ndarray, np.ndarray, float], npt.ArrayLike],
+    process_covariance: Callable[[np.ndarray, np.ndarray, float, np.ndarray, np.ndarray],
+                                 npt.ArrayLike],
+    jacobian_state: Optional[Callable[[np.ndarray, np.ndarray, float], npt.ArrayLike]] = None,
+    dt: float = 0.1, control_sd: npt.ArrayLike = (0.1, 0.05),
+    state_sd: npt.ArrayLike = (0.02, 0.02, 0.0034906585039886592), controls: str = "u1, u2",
+    description: str = "a motion model written in Python") -> None: ...
+def motion_models() -> list[dict[str, Any]]: ...

@@ -31,8 +31,9 @@ def run(method="implicit", particles=100, datasets=50, seed=1, data=None, associ
 
     Each argument is the CLI flag of the same name (docs/cli.md); data None means the synthetic
     Car Park data sets, else a robot log; range_sd [m] and bearing_sd_deg [deg] (--range-sd,
-    --bearing-sd; bearing_sd, the same in degrees, is deprecated); out a folder for CSV files.
-    verbose: True draws the tool's progress bar (steps done, ETA) on stderr, as `implicit slam`
+    --bearing-sd; bearing_sd, the same in degrees, is deprecated); out a folder for CSV files;
+    model a motion model by name (None: the one the log declares; see
+    implicit.models.motion_models and register_motion_model). verbose: True draws the tool's progress bar (steps done, ETA) on stderr, as `implicit slam`
     without --json does; the result is the same either way. progress, if given, is called as
     progress(steps done, steps in all) (steps over all data sets, so that one long run moves
     too), with the interpreter's lock held, at most about 10 times a second and once more with

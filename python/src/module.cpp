@@ -9,6 +9,7 @@
 namespace implicit::python {
 void init_core(py::module_& m);
 void init_models(py::module_& m);
+void init_motion_registry(py::module_& m);
 void init_data(py::module_& m);
 void init_bag(py::module_& m);
 void init_filter(py::module_& m);
@@ -31,6 +32,7 @@ PYBIND11_MODULE(_implicit, m) {
   ip::init_core(m);
   auto models = m.def_submodule("models", "Motion and sensor models.");
   ip::init_models(models);
+  ip::init_motion_registry(models);
   auto data = m.def_submodule("data", "Robot logs and data sets.");
   ip::init_data(data);
   ip::init_bag(data);

@@ -81,7 +81,7 @@ BAD_RUNS = [
     # ... the text settings: the tool's own check and message
     (mcl(method="x"), r"^mcl --method: expected 'standard' or 'implicit', got 'x'"),
     (mcl(init="nowhere"), r"^mcl --init: expected known or global, got 'nowhere'"),
-    (mcl(model="tank"), r"^mcl --model: expected 'ute' or 'unicycle', got 'tank'"),
+    (mcl(model="tank"), r"^mcl --model: expected one of 'ute', 'unicycle'.*, got 'tank'"),
     # implicit.slam.run: the ranges of `implicit slam`'s flags
     (slam(particles=1_000_001), r"^particles: expected an integer in \[1, 1000000\], got 1000001"),
     (slam(particles=2**31), r"^particles: expected an integer in \[1, 1000000\], got 2147483648"),

@@ -399,7 +399,10 @@ SlamDataset dataset_from_robot_log(const robot::RobotLog& log, const robot::UteP
   // Known ids become indices 0..K-1 in the order of the landmark records.
   for (std::size_t k = 0; k < log.landmarks.size(); ++k)
     d.landmarks.push_back(log.landmarks.position(k));
-  if (log.vehicle) d.vehicle_model = log.vehicle->model;
+  if (log.vehicle) {
+    d.vehicle_model = log.vehicle->model;
+    d.vehicle_parameters = log.vehicle->parameters;
+  }
   const auto schedule = robot::make_schedule(log, log.initial->time, 0.5 * vehicle.dt);
   d.scans_unscheduled = schedule.scans_skipped;
   d.detections_unscheduled = schedule.observations_skipped;
@@ -492,7 +495,8 @@ void write_slam_log(const SlamDataset& d, const std::filesystem::path& path) {
   if (d.vehicle_model.empty() || d.vehicle_model == "ute") {
     log.vehicle = robot::declare_vehicle(d.vehicle);
   } else {
-    log.vehicle = robot::VehicleDeclaration{d.vehicle_model, {{"dt", d.vehicle.dt}}};
+    log.vehicle = robot::VehicleDeclaration{d.vehicle_model, d.vehicle_parameters};
+    if (!log.vehicle->parameter("dt")) log.vehicle->parameters.emplace_back("dt", d.vehicle.dt);
   }
   log.initial = robot::PosePrior{0.0, d.initial_pose, Vec<3>::Zero()};
   double t = 0.0;

@@ -46,7 +46,9 @@ TEST(AnyRobotCli, SlamOnAUnicycleRefusesTheUteNoiseAndReportsItsOwn) {
   const auto refused = run_cli(slam + " --control-noise 0.3");
   EXPECT_EQ(refused.code, 1) << refused.err;
   EXPECT_NE(refused.err.find("--control-noise 0.3"), std::string::npos) << refused.err;
-  EXPECT_NE(refused.err.find("--control-sd V OMEGA"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("--control-sd U1 U2 (sd of u1 = v [m/s], u2 = omega [rad/s])"),
+            std::string::npos)
+      << refused.err;
   const auto r = run_cli(slam + " --control-sd 0.2 0.07");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);

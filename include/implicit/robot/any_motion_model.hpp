@@ -4,6 +4,7 @@
 //
 //   robot::AnyMotionModel motion = robot::UnicycleModel();   // or UteModel, or your own
 //   Pose f = motion.with_dt(0.2).predict(x, u);
+//   if (const auto* u = motion.target<robot::UnicycleModel>()) ...   // the model as its type
 //
 // The model must satisfy LinearizableMotionModel: MotionModel, with_dt() (steps of any length)
 // and jacobian_state() (EKF-SLAM linearises the motion). Each call costs one indirect call;
@@ -40,6 +41,14 @@ class AnyMotionModel {
     return self_->process_covariance(x, u);
   }
   Mat3 jacobian_state(const Pose& x, const Control& u) const { return self_->jacobian_state(x, u); }
+
+  /// The model held, as its own type M; nullptr when it holds another type. Estimators use it to
+  /// run a known model without the indirect calls (experiments/motion_models.hpp).
+  template <typename M>
+  const M* target() const {
+    const auto* holder = dynamic_cast<const Holder<M>*>(self_.get());
+    return holder ? &holder->model : nullptr;
+  }
 
  private:
   struct Interface {

@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "implicit/robot/log_format.hpp"
@@ -40,6 +41,9 @@ struct SlamDataset {
   std::string name;
   robot::UteParams vehicle;   ///< geometry and dt (noise settings belong to the filter)
   std::string vehicle_model;  ///< the model a log declares ("ute", ...); "" if none
+  /// The `vehicle` record's key=value pairs as declared (a model other than the Ute builds from
+  /// them); empty if the log declares none.
+  std::vector<std::pair<std::string, double>> vehicle_parameters;
   /// read_slam_log: the log declares no vehicle, neither by record nor by `# vehicle` comment, so
   /// the Car Park's Ute was assumed (the CLI says so on stderr and in its JSON).
   bool vehicle_assumed = false;
