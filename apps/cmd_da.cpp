@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include "context.hpp"
+#include "experiments/choices.hpp"
 #include "experiments/da.hpp"
 #include "implicit/core/parallel.hpp"
 #include "registry.hpp"
@@ -44,9 +45,8 @@ void setup_da(CLI::App& sub) {
   sub.add_option("--forcing", s.forcing, "Lorenz-96 forcing F")
       ->check(in_range(-1e6, 1e6))
       ->capture_default_str();
-  sub.add_option("--method", s.method,
-                 "bootstrap, implicit (particle filters), enkf, etkf or implicit-smoother")
-      ->check(CLI::IsMember({"bootstrap", "implicit", "enkf", "etkf", "implicit-smoother"}))
+  sub.add_option("--method", s.method, experiments::da_methods().help())
+      ->check(CLI::IsMember(experiments::da_methods().names()))
       ->capture_default_str();
   sub.add_option("-N,--members", s.members, "Ensemble members / particles N")
       ->check(in_range(2, 10000000))

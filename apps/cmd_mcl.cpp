@@ -8,6 +8,7 @@
 #include "cmd_mcl_laser.hpp"
 #include "context.hpp"
 #include "experiments.hpp"
+#include "experiments/choices.hpp"
 #include "experiments/motion_models.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/robot/bag.hpp"
@@ -175,9 +176,8 @@ void run_mcl_command(MclCommand& cmd, CLI::App& sub, const CLI::Option* sensor) 
 
 void setup_mcl(CLI::App& sub) {
   auto cmd = std::make_shared<MclCommand>();
-  sub.add_option("--method", cmd->settings.method,
-                 "standard: bootstrap MCL; implicit: implicit sampling per particle")
-      ->check(CLI::IsMember({"standard", "implicit"}))
+  sub.add_option("--method", cmd->settings.method, experiments::mcl_methods().help())
+      ->check(CLI::IsMember(experiments::mcl_methods().names()))
       ->capture_default_str();
   cmd->particles =
       sub.add_option("--particles,-M", cmd->settings.particles,

@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "experiments/choices.hpp"
 #include "implicit/core/error.hpp"
 #include "tum_output.hpp"
 
@@ -17,16 +18,11 @@ namespace implicit::app {
 void add_laser_options(CLI::App& sub, LaserCommand& l) {
   auto& s = l.settings;
   add_bag_flags(sub, l.bag);
-  sub.add_option("--sensor", l.sensor,
-                 "landmark: range-bearing detections of point landmarks (Car Park, robot logs); "
-                 "laser: 2-D laser scans on an occupancy grid (--data a CARMEN log, or a robot "
-                 "log with laser records)")
-      ->check(CLI::IsMember({"landmark", "laser"}))
+  sub.add_option("--sensor", l.sensor, experiments::sensors().help())
+      ->check(CLI::IsMember(experiments::sensors().names()))
       ->capture_default_str();
-  sub.add_option("--laser-model", l.laser_model,
-                 "laser: likelihood-field (distances to the nearest obstacle; both proposals) or "
-                 "beam (ray casting; bootstrap only)")
-      ->check(CLI::IsMember({"likelihood-field", "beam"}))
+  sub.add_option("--laser-model", l.laser_model, "laser: " + experiments::laser_models().help())
+      ->check(CLI::IsMember(experiments::laser_models().names()))
       ->capture_default_str();
   sub.add_option("--z-short", s.beam.z_short, "laser, beam model: weight of an unexpected obstacle")
       ->check(in_range(0.0, 1e6))

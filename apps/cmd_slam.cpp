@@ -1,4 +1,5 @@
 // `implicit slam`: EKF-SLAM, FastSLAM 1.0/2.0 and implicit SLAM (paper §4.2, Table 6, Figure 7).
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -7,6 +8,7 @@
 #include "cmd_slam_laser.hpp"
 #include "context.hpp"
 #include "experiments.hpp"
+#include "experiments/choices.hpp"
 #include "experiments/motion_models.hpp"
 #include "implicit/core/parallel.hpp"
 #include "plural.hpp"
@@ -78,11 +80,13 @@ void run_slam_command(SlamCommand& cmd) {
 void setup_slam(CLI::App& sub) {
   auto cmd = std::make_shared<SlamCommand>();
   auto& s = cmd->settings;
+  std::vector<std::string> methods = experiments::landmark_slam_methods().names();
+  for (const std::string& m : experiments::grid_slam_methods().names())
+    if (std::find(methods.begin(), methods.end(), m) == methods.end()) methods.push_back(m);
   sub.add_option("--method", s.method,
-                 "ekf | fastslam1 | fastslam2 | implicit (paper, point landmarks) | implicit-rb "
-                 "(Rao-Blackwellised); --sensor laser: bootstrap | gmapping | implicit")
-      ->check(CLI::IsMember(
-          {"ekf", "fastslam1", "fastslam2", "implicit", "implicit-rb", "bootstrap", "gmapping"}))
+                 experiments::landmark_slam_methods().help() +
+                     "; --sensor laser: " + experiments::grid_slam_methods().help())
+      ->check(CLI::IsMember(methods))
       ->capture_default_str();
   cmd->grid.particles = sub.add_option("--particles,-M", s.particles,
                                        "Particles M (ignored by ekf; --sensor laser: default 30)")

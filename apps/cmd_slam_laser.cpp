@@ -16,6 +16,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "experiments/choices.hpp"
 #include "experiments/grid_slam.hpp"
 #include "implicit/robot/bag.hpp"
 #include "implicit/robot/carmen.hpp"
@@ -39,9 +40,9 @@ experiments::GridSlamProgress grid_slam_progress(Progress& bar) {
 
 void add_grid_slam_options(CLI::App& sub, GridSlamCommand& g) {
   sub.add_option("--sensor", g.sensor,
-                 "landmark: point landmarks (synthetic Car Park data or a robot log); laser: grid "
-                 "SLAM on a CARMEN laser log (--method bootstrap, gmapping or implicit)")
-      ->check(CLI::IsMember({"landmark", "laser"}))
+                 experiments::sensors().help() + " (laser: grid SLAM, --method " +
+                     experiments::grid_slam_methods().quoted() + ")")
+      ->check(CLI::IsMember(experiments::sensors().names()))
       ->capture_default_str();
   g.laser_only = {
       sub.add_option("--alphas", g.alphas,

@@ -96,4 +96,92 @@ slam::TruthMode parse_slam_truth(std::string_view text) {
 }
 std::string_view name_of(slam::TruthMode truth) { return name(kSlamTruths, truth); }
 
+std::vector<std::string> ChoiceSet::names() const {
+  std::vector<std::string> out;
+  for (const Choice& c : choices) out.emplace_back(c.name);
+  return out;
+}
+
+std::string ChoiceSet::help() const {
+  std::string out;
+  for (const Choice& c : choices)
+    out += fmt::format("{}{}: {}", out.empty() ? "" : "; ", c.name, c.meaning);
+  return out;
+}
+
+std::string ChoiceSet::quoted() const {
+  std::string out;
+  for (std::size_t k = 0; k < choices.size(); ++k)
+    out += fmt::format("{}'{}'", k == 0 ? "" : (k + 1 == choices.size() ? " or " : ", "),
+                       choices[k].name);
+  return out;
+}
+
+std::string_view ChoiceSet::check(std::string_view text, std::string_view what) const {
+  for (const Choice& c : choices)
+    if (c.name == text) return c.name;
+  throw InvalidArgument(
+      fmt::format("{}: expected {}, got '{}'", what.empty() ? setting : what, quoted(), text));
+}
+
+const ChoiceSet& mcl_methods() {
+  static const ChoiceSet set{"mcl --method",
+                             {{"standard", "bootstrap MCL (the motion model is the proposal)"},
+                              {"implicit", "implicit sampling per particle"}}};
+  return set;
+}
+
+const ChoiceSet& sensors() {
+  static const ChoiceSet set{
+      "--sensor",
+      {{"landmark", "range-bearing detections of point landmarks (Car Park, robot logs)"},
+       {"laser",
+        "2-D laser scans on an occupancy grid (a CARMEN log, a robot log with laser "
+        "records, or a ROS bag)"}}};
+  return set;
+}
+
+const ChoiceSet& laser_models() {
+  static const ChoiceSet set{
+      "mcl --laser-model",
+      {{"likelihood-field", "distances to the nearest obstacle (both proposals)"},
+       {"beam", "ray casting (the bootstrap proposal only)"}}};
+  return set;
+}
+
+const ChoiceSet& landmark_slam_methods() {
+  static const ChoiceSet set{"slam --method",
+                             {{"ekf", "EKF-SLAM"},
+                              {"fastslam1", "FastSLAM 1.0 (the motion model is the proposal)"},
+                              {"fastslam2", "FastSLAM 2.0 (the EKF-linearised optimal proposal)"},
+                              {"implicit", "implicit sampling of the pose (the paper's SLAM)"},
+                              {"implicit-rb", "implicit sampling, Rao-Blackwellised"}}};
+  return set;
+}
+
+const ChoiceSet& grid_slam_methods() {
+  static const ChoiceSet set{
+      "slam --sensor laser --method",
+      {{"bootstrap", "the motion model is the proposal"},
+       {"gmapping", "scan matching against the particle's map, GMapping's approximate weights"},
+       {"implicit", "implicit sampling of the pose against the particle's map, exact weights"}}};
+  return set;
+}
+
+const ChoiceSet& da_methods() {
+  static const ChoiceSet set{
+      "da --method",
+      {{"bootstrap", "bootstrap particle filter"},
+       {"implicit", "implicit particle filter"},
+       {"enkf", "stochastic EnKF (perturbed observations)"},
+       {"etkf", "square-root EnKF (ETKF)"},
+       {"implicit-smoother", "implicit smoother over a window of L cycles"}}};
+  return set;
+}
+
+std::vector<const ChoiceSet*> choice_sets() {
+  return {&mcl_methods(),           &sensors(),           &laser_models(),
+          &landmark_slam_methods(), &grid_slam_methods(), &da_methods()};
+}
+
 }  // namespace implicit::experiments

@@ -9,7 +9,9 @@
 //   s.mode = parse_slit_mode("paper");       // control::SlitEstimator::kPaper
 //   name_of(s.mode);                         // "paper"
 
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "experiments/slit_table.hpp"
 #include "implicit/control/double_slit.hpp"
@@ -18,6 +20,39 @@
 #include "implicit/slam/dataset.hpp"
 
 namespace implicit::experiments {
+
+/// One choice of a setting that takes a name: the name and what it means.
+struct Choice {
+  std::string_view name;
+  std::string_view meaning;
+};
+
+/// The methods, proposals and sensor models a setting chooses from, listed once: the command
+/// line's check and help, the experiments' and Python's checks, and docs/cli.md's table of
+/// choices come from here (a test checks the table, and that each name parses where the run
+/// parses it).
+struct ChoiceSet {
+  std::string_view setting;  ///< "mcl --method": the flag, as the messages name it
+  std::vector<Choice> choices;
+
+  std::vector<std::string> names() const;
+  /// "standard: bootstrap MCL; implicit: implicit sampling per particle"
+  std::string help() const;
+  /// "'a' or 'b'", "'a', 'b' or 'c'"
+  std::string quoted() const;
+  /// `text` when it names a choice; else InvalidArgument "`what`: expected 'a' or 'b', got
+  /// 'text'" (what defaults to the setting).
+  std::string_view check(std::string_view text, std::string_view what = {}) const;
+};
+
+const ChoiceSet& mcl_methods();            ///< mcl --method: standard, implicit
+const ChoiceSet& sensors();                ///< mcl and slam --sensor: landmark, laser
+const ChoiceSet& laser_models();           ///< mcl --laser-model: likelihood-field, beam
+const ChoiceSet& landmark_slam_methods();  ///< slam --method: ekf ... implicit-rb
+const ChoiceSet& grid_slam_methods();      ///< slam --sensor laser --method: bootstrap ...
+const ChoiceSet& da_methods();             ///< da --method: bootstrap ... implicit-smoother
+/// Every set above, in that order (docs/cli.md's table of choices lists them so).
+std::vector<const ChoiceSet*> choice_sets();
 
 /// MCL's noise setting (spec §3.9): A is the paper's P = 0.5, B is P = 0.1.
 enum class NoiseConfig { kA, kB };

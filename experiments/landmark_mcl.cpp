@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "experiments/choices.hpp"
 #include "experiments/landmark_mcl.hpp"
 #include "experiments/landmark_mcl_global.hpp"
 #include "experiments/motion_models.hpp"
@@ -190,8 +191,7 @@ void write_mcl_tum_files(const MclSettings& s, const LocalizationProblem& proble
 }
 
 nlohmann::json run_mcl(const MclSettings& s, const RunContext& ctx) {
-  require(s.method == "standard" || s.method == "implicit",
-          "mcl --method: expected 'standard' or 'implicit', got '{}'", s.method);
+  (void)mcl_methods().check(s.method);
   require(s.particles >= 1, "mcl --particles: expected >= 1, got {}", s.particles);
   require(s.runs >= 1, "mcl --runs: expected >= 1, got {}", s.runs);
   require(s.gps_std > 0 && std::isfinite(s.gps_std), "mcl --gps-std: expected > 0, got {}",

@@ -160,6 +160,19 @@ bool bool_arg(const py::handle& o, const std::string& name) {
 }
 
 std::string choice_arg(const py::handle& o, const std::string& name,
+                       const std::vector<std::string>& allowed) {
+  std::string text;
+  for (std::size_t k = 0; k < allowed.size(); ++k)
+    text +=
+        fmt::format("{}'{}'", k == 0 ? "" : (k + 1 == allowed.size() ? " or " : ", "), allowed[k]);
+  require(py::isinstance<py::str>(o), "{}: expected {}, got {}", name, text, type_name(o));
+  const std::string s = o.cast<std::string>();
+  for (const std::string& a : allowed)
+    if (s == a) return s;
+  throw InvalidArgument(fmt::format("{}: expected {}, got '{}'", name, text, printable(s)));
+}
+
+std::string choice_arg(const py::handle& o, const std::string& name,
                        std::initializer_list<const char*> allowed) {
   require(py::isinstance<py::str>(o), "{}: expected {}, got {}", name, arg_choices_text(allowed),
           type_name(o));

@@ -84,6 +84,9 @@ bool bool_arg(const py::handle& o, const std::string& name);
 /// A str that is one of `allowed`.
 std::string choice_arg(const py::handle& o, const std::string& name,
                        std::initializer_list<const char*> allowed);
+/// The same for a list of names drawn from a registry (experiments/choices.hpp's ChoiceSet).
+std::string choice_arg(const py::handle& o, const std::string& name,
+                       const std::vector<std::string>& allowed);
 /// A str or os.PathLike naming a file.
 std::filesystem::path path_arg(const py::handle& o, const std::string& name);
 

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common.hpp"
+#include "experiments/choices.hpp"
 #include "experiments/da.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/da/lorenz.hpp"
@@ -74,8 +75,7 @@ experiments::DaSettings da_settings(const py::dict& kw) {
   s.model = choice_arg(da_setting(kw, "model"), "model", {"lorenz63", "lorenz96"});
   s.dim = da_int(kw, "dim");
   s.forcing = da_number(kw, "forcing");
-  s.method = choice_arg(da_setting(kw, "method"), "method",
-                        {"bootstrap", "implicit", "enkf", "etkf", "implicit-smoother"});
+  s.method = choice_arg(da_setting(kw, "method"), "method", experiments::da_methods().names());
   s.members = da_int(kw, "members");
   s.seeds = da_int(kw, "seeds");
   s.jitter = da_number(kw, "jitter");

@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "experiments/choices.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/slam/grid/grid_slam_run.hpp"
 #include "laser.hpp"
@@ -148,7 +149,7 @@ py::dict grid(const py::dict& kw, const py::object& progress) {
   const bool from_dict = py::isinstance<py::dict>(data);
   const std::filesystem::path file = from_dict ? std::filesystem::path() : path_arg(data, "data");
   const std::string method =
-      choice_arg(setting(kw, "method"), "method", {"bootstrap", "gmapping", "implicit"});
+      choice_arg(setting(kw, "method"), "method", experiments::grid_slam_methods().names());
   slam::GridSlamRunOptions o;
   o.proposal = slam::parse_grid_proposal(method);
   o.filter.particles =

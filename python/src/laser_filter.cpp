@@ -15,6 +15,7 @@
 #include <Eigen/Cholesky>
 #include <nlohmann/json.hpp>
 
+#include "experiments/choices.hpp"
 #include "experiments/laser_mcl.hpp"
 #include "implicit/core/parallel.hpp"
 #include "implicit/filter/monte_carlo_localization.hpp"
@@ -321,7 +322,7 @@ void read_laser_model(const RunArgs& arg, bool implicit, experiments::LaserMclSe
   s.beam.max_beams = s.laser.max_beams;
   s.beam.laser_max_range = s.laser.laser_max_range;
   s.laser_model = experiments::parse_laser_model(
-      choice_arg(arg("laser_model"), "laser_model", {"likelihood-field", "beam"}));
+      choice_arg(arg("laser_model"), "laser_model", experiments::laser_models().names()));
   if (s.laser_model == experiments::LaserModelKind::kBeam)
     require(!implicit, kBeamNeedsBootstrap);
   else

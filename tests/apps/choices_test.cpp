@@ -3,12 +3,21 @@
 // rows show.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "experiments/choices.hpp"
+#include "experiments/laser_mcl.hpp"
 #include "implicit/core/error.hpp"
+#include "implicit/da/filters.hpp"
+#include "implicit/slam/grid/grid_slam_run.hpp"
+#include "implicit/slam/slam_filter.hpp"
 
 namespace {
 
@@ -57,6 +66,61 @@ TEST(Choices, OtherTextIsRefusedNamingTheFlagAndTheNames) {
   EXPECT_EQ(refusal(parse_mcl_truth, "GPS"),
             "mcl --truth: expected 'gps' or 'reference', got 'GPS'");
   EXPECT_EQ(refusal(parse_slam_truth, "log"), "--truth: expected paper|consistent, got 'log'");
+}
+
+TEST(Choices, EveryListedMethodParsesWhereTheRunParsesIt) {
+  for (const Choice& c : mcl_methods().choices)
+    EXPECT_NO_THROW((void)parse_proposal(c.name)) << c.name;
+  for (const Choice& c : laser_models().choices)
+    EXPECT_EQ(to_string(parse_laser_model(c.name)), c.name);
+  for (const Choice& c : landmark_slam_methods().choices)
+    EXPECT_NO_THROW((void)implicit::slam::parse_slam_method(c.name)) << c.name;
+  for (const Choice& c : grid_slam_methods().choices)
+    EXPECT_EQ(implicit::slam::to_string(implicit::slam::parse_grid_proposal(c.name)), c.name);
+  // implicit-smoother runs da::ImplicitSmoother (experiments/da.cpp); the others are the
+  // filters of da::parse_method.
+  for (const Choice& c : da_methods().choices) {
+    if (c.name != "implicit-smoother") {
+      EXPECT_NO_THROW((void)implicit::da::parse_method(c.name)) << c.name;
+    }
+  }
+  // And what the runs parse is listed: a method the parsers know but the list does not would be
+  // refused by the tool's check.
+  EXPECT_THROW((void)implicit::da::parse_method("no-such-method"), implicit::InvalidArgument);
+  EXPECT_EQ(da_methods().names().size(), 5u);
+  EXPECT_EQ(landmark_slam_methods().names().size(), 5u);
+}
+
+TEST(Choices, ACheckNamesTheSettingAndEveryChoice) {
+  EXPECT_EQ(refusal([](std::string_view t) { return mcl_methods().check(t); }, "x"),
+            "mcl --method: expected 'standard' or 'implicit', got 'x'");
+  EXPECT_EQ(refusal([](std::string_view t) { return da_methods().check(t, "method"); }, "pf"),
+            "method: expected 'bootstrap', 'implicit', 'enkf', 'etkf' or 'implicit-smoother', "
+            "got 'pf'");
+  EXPECT_EQ(mcl_methods().check("implicit"), "implicit");
+  EXPECT_EQ(laser_models().help(),
+            "likelihood-field: distances to the nearest obstacle (both proposals); beam: ray "
+            "casting (the bootstrap proposal only)");
+}
+
+TEST(Choices, TheTableOfCliMdIsTheListOfChoices) {
+  std::ifstream in(std::filesystem::path(IMPLICIT_SOURCE_DIR) / "docs" / "cli.md");
+  ASSERT_TRUE(in) << "docs/cli.md";
+  std::vector<std::string> rows;
+  bool in_table = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line == "| setting | choice | meaning |")
+      in_table = true;
+    else if (in_table && !line.starts_with("|"))
+      in_table = false;
+    else if (in_table && !line.starts_with("|---"))
+      rows.push_back(line);
+  }
+  std::vector<std::string> expected;
+  for (const ChoiceSet* set : choice_sets())
+    for (const Choice& c : set->choices)
+      expected.push_back(fmt::format("| `{}` | `{}` | {} |", set->setting, c.name, c.meaning));
+  EXPECT_EQ(rows, expected);
 }
 
 }  // namespace
