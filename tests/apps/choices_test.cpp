@@ -3,9 +3,6 @@
 // rows show.
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <fstream>
-#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,6 +15,7 @@
 #include "implicit/da/filters.hpp"
 #include "implicit/slam/grid/grid_slam_run.hpp"
 #include "implicit/slam/slam_filter.hpp"
+#include "markdown_table.hpp"
 
 namespace {
 
@@ -104,18 +102,9 @@ TEST(Choices, ACheckNamesTheSettingAndEveryChoice) {
 }
 
 TEST(Choices, TheTableOfCliMdIsTheListOfChoices) {
-  std::ifstream in(std::filesystem::path(IMPLICIT_SOURCE_DIR) / "docs" / "cli.md");
-  ASSERT_TRUE(in) << "docs/cli.md";
-  std::vector<std::string> rows;
-  bool in_table = false;
-  for (std::string line; std::getline(in, line);) {
-    if (line == "| setting | choice | meaning |")
-      in_table = true;
-    else if (in_table && !line.starts_with("|"))
-      in_table = false;
-    else if (in_table && !line.starts_with("|---"))
-      rows.push_back(line);
-  }
+  const std::vector<std::string> rows =
+      implicit::test::markdown_table_rows("docs/cli.md", "| setting | choice | meaning |");
+  ASSERT_FALSE(rows.empty()) << "docs/cli.md: no table of choices";
   std::vector<std::string> expected;
   for (const ChoiceSet* set : choice_sets())
     for (const Choice& c : set->choices)

@@ -5,8 +5,6 @@
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <fstream>
 #include <set>
 #include <string>
 #include <type_traits>
@@ -14,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "implicit/core/error.hpp"
+#include "markdown_table.hpp"
 
 namespace implicit::experiments {
 namespace {
@@ -120,18 +119,10 @@ std::string table_row(const MotionModelEntry& e) {
 }
 
 TEST(MotionModels, TheFormatsTableListsEveryBuiltInModelAsTheRegistryDoes) {
-  std::ifstream in(std::filesystem::path(IMPLICIT_SOURCE_DIR) / "docs" / "formats.md");
-  ASSERT_TRUE(in) << "docs/formats.md";
-  std::set<std::string> rows;
-  bool in_table = false;
-  for (std::string line; std::getline(in, line);) {
-    if (line.starts_with("| model | controls | `vehicle` keys (default) | robot |"))
-      in_table = true;
-    else if (in_table && !line.starts_with("|"))
-      in_table = false;
-    else if (in_table && !line.starts_with("|---"))
-      rows.insert(line);
-  }
+  const std::vector<std::string> table = implicit::test::markdown_table_rows(
+      "docs/formats.md", "| model | controls | `vehicle` keys (default) | robot |");
+  ASSERT_FALSE(table.empty()) << "docs/formats.md: no table of motion models";
+  const std::set<std::string> rows(table.begin(), table.end());
   std::set<std::string> expected;
   for (const char* name : {"ute", "unicycle"})
     expected.insert(table_row(motion_model(name, "test")));
