@@ -15,7 +15,7 @@ SANITIZE_CXX ?= clang++-14
 # placeholders, which test-sanitize leaves out by name.
 FUZZ_TARGETS = robot_log carpark slam_data results_json occupancy_map carmen_log resume_record \
   trajectory bag nav2_params
-SANITIZE_TARGETS ?= implicit_cli test_core test_filter test_control test_robot test_slam test_da test_apps \
+SANITIZE_TARGETS ?= implicit_cli implicit_toy test_core test_filter test_control test_robot test_slam test_da test_apps \
 	$(addprefix fuzz_,$(FUZZ_TARGETS))
 SANITIZE_EXCLUDE ?= slow|packaging|docs
 # Each fuzz target runs this many seconds in `make fuzz-smoke` (a smoke test: tens of thousands

@@ -45,6 +45,10 @@ def main():
     parser.add_argument("--cli", required=True)
     parser.add_argument("--work", required=True)
     a = parser.parse_args()
+    for program in (a.toy, a.cli):
+        if not pathlib.Path(program).is_file():
+            sys.exit(f"{program} was not built: build the targets implicit_toy and implicit_cli "
+                     f"(make test-sanitize's SANITIZE_TARGETS lists both)")
     work = pathlib.Path(a.work)
     work.mkdir(parents=True, exist_ok=True)
     unicycle, toy = work / "unicycle.log", work / "toy.log"
