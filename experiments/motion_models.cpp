@@ -65,16 +65,16 @@ std::deque<MotionModelEntry>& registry() {
   return entries;
 }
 
-std::string quoted_names() {
+}  // namespace
+
+const std::deque<MotionModelEntry>& motion_models() { return registry(); }
+
+std::string motion_model_quoted_names() {
   std::string names;
   for (const auto& e : registry())
     names += fmt::format("{}'{}'", names.empty() ? "" : ", ", e.name);
   return names;
 }
-
-}  // namespace
-
-const std::deque<MotionModelEntry>& motion_models() { return registry(); }
 
 std::vector<std::string> motion_model_names() {
   std::vector<std::string> names;
@@ -86,7 +86,7 @@ const MotionModelEntry& motion_model(std::string_view name, std::string_view wha
   for (const auto& e : registry())
     if (e.name == name) return e;
   throw InvalidArgument(
-      fmt::format("{}: expected one of {}, got '{}'", what, quoted_names(), name));
+      fmt::format("{}: expected one of {}, got '{}'", what, motion_model_quoted_names(), name));
 }
 
 std::string motion_model_choices() {

@@ -72,6 +72,8 @@ std::vector<std::string> motion_model_names();
 /// The entry named `name`; an InvalidArgument naming `what` (e.g. "mcl --model") and the
 /// names known otherwise.
 const MotionModelEntry& motion_model(std::string_view name, std::string_view what);
+/// For messages: the names as "'ute', 'unicycle', 'toy'".
+std::string motion_model_quoted_names();
 /// For --help: the names as "ute, unicycle or toy".
 std::string motion_model_choices();
 /// For --control-sd's help: what u1 and u2 are per model, with the default sd.

@@ -45,13 +45,11 @@ std::string resolve_model(const std::string& command, const std::string& flag,
   bool known = false;
   for (const auto& e : motion_models()) known = known || e.name == *declared;
   if (!known) {
-    std::string names;
-    for (const auto& n : motion_model_names()) names += (names.empty() ? "'" : ", '") + n + "'";
     throw InvalidArgument(fmt::format(
         "{}: the log '{}' declares vehicle '{}'; this program runs {} (a new one is registered "
         "in experiments/motion_models.hpp, or from Python with "
         "implicit.models.register_motion_model)",
-        command, data_name, *declared, names));
+        command, data_name, *declared, motion_model_quoted_names()));
   }
   require(flag.empty() || flag == *declared,
           "{} --model {}: the log '{}' declares vehicle '{}' (controls: {}), not '{}' (controls: "

@@ -54,14 +54,10 @@ std::string arg_bounds_text(double lo, double hi, bool lo_open) {
   return fmt::format("a number in {}{}, {}]", lo_open ? "(" : "[", lo, hi);
 }
 
-std::string arg_choices_text(std::initializer_list<const char*> allowed) {
+std::string arg_choices_text(const std::vector<std::string>& allowed) {
   std::string s;
-  std::size_t k = 0;
-  for (const char* a : allowed) {
-    s += k == 0 ? "" : (k + 1 == allowed.size() ? " or " : ", ");
-    s += fmt::format("'{}'", a);
-    ++k;
-  }
+  for (std::size_t k = 0; k < allowed.size(); ++k)
+    s += fmt::format("{}'{}'", k == 0 ? "" : (k + 1 == allowed.size() ? " or " : ", "), allowed[k]);
   return s;
 }
 
@@ -161,10 +157,7 @@ bool bool_arg(const py::handle& o, const std::string& name) {
 
 std::string choice_arg(const py::handle& o, const std::string& name,
                        const std::vector<std::string>& allowed) {
-  std::string text;
-  for (std::size_t k = 0; k < allowed.size(); ++k)
-    text +=
-        fmt::format("{}'{}'", k == 0 ? "" : (k + 1 == allowed.size() ? " or " : ", "), allowed[k]);
+  const std::string text = arg_choices_text(allowed);
   require(py::isinstance<py::str>(o), "{}: expected {}, got {}", name, text, type_name(o));
   const std::string s = o.cast<std::string>();
   for (const std::string& a : allowed)
@@ -174,13 +167,7 @@ std::string choice_arg(const py::handle& o, const std::string& name,
 
 std::string choice_arg(const py::handle& o, const std::string& name,
                        std::initializer_list<const char*> allowed) {
-  require(py::isinstance<py::str>(o), "{}: expected {}, got {}", name, arg_choices_text(allowed),
-          type_name(o));
-  const std::string s = o.cast<std::string>();
-  for (const char* a : allowed)
-    if (s == a) return s;
-  throw InvalidArgument(
-      fmt::format("{}: expected {}, got '{}'", name, arg_choices_text(allowed), printable(s)));
+  return choice_arg(o, name, std::vector<std::string>(allowed.begin(), allowed.end()));
 }
 
 std::filesystem::path path_arg(const py::handle& o, const std::string& name) {
