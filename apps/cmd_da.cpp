@@ -22,7 +22,9 @@ void print_da_text(const nlohmann::json& r) {
              r["setting"].get<std::string>(), r["dim"].get<int>(), r["method"].get<std::string>(),
              r["members"].get<int>(), r["seeds"].get<int>(), r["seed"].get<std::uint64_t>());
   const auto& rm = r["rmse_a"];
-  if (rm["ci95"].is_null())
+  if (r["diverged_runs"].get<int>() > 0)
+    fmt::print("rmse.a   undefined: a run diverged (below)\n");
+  else if (rm["ci95"].is_null())
     fmt::print("rmse.a   {:.4f}\n", rm["mean"].get<double>());
   else
     fmt::print("rmse.a   {:.4f}  95% CI [{:.4f}, {:.4f}]\n", rm["mean"].get<double>(),
@@ -30,6 +32,23 @@ void print_da_text(const nlohmann::json& r) {
   fmt::print("spread.a {:.4f}\nmean ESS {:.1f}\n{:.3f} ms per cycle, {:.1f} s\n",
              r["spread_a"].get<double>(), r["mean_ess"].get<double>(),
              r["ms_per_cycle"].get<double>(), r["seconds"].get<double>());
+}
+
+/// A run whose filter diverged has no rmse.a: stderr names the runs, and the exit code is 1.
+void report_divergence(const nlohmann::json& r) {
+  const int diverged = r["diverged_runs"].get<int>();
+  if (diverged == 0) return;
+  std::string runs;
+  for (const auto& run : r["runs"])
+    if (run["diverged_at_cycle"].is_number())
+      runs += fmt::format("{}seed {} at cycle {}", runs.empty() ? "" : ", ",
+                          run["seed"].get<std::uint64_t>(), run["diverged_at_cycle"].get<int>());
+  fmt::print(stderr,
+             "implicit da: error: {} of {} runs diverged (the analysis mean left the finite "
+             "numbers: {}), so rmse.a is not defined; more members, inflation or jitter may keep "
+             "the filter on track\n",
+             diverged, r["seeds"].get<int>(), runs);
+  throw CLI::RuntimeError(1);
 }
 
 void setup_da(CLI::App& sub) {
@@ -85,14 +104,26 @@ void setup_da(CLI::App& sub) {
                  "implicit-smoother: Newton starts per window, the background and the heaviest "
                  "members (default 3; refused with the filters)")
       ->check(in_range(1, 1000));
-  sub.add_option("--cycles", s.cycles, "Observation cycles (0: the setting's, 1000 or 1280)")
+  sub.add_option("--obs-every", s.obs_every,
+                 "K: observe after every K-th model interval (the setting's interval each); "
+                 "with --model-noise, where implicit and optimal-proposal sampling differ")
+      ->check(in_range(1, 10000))
+      ->capture_default_str();
+  sub.add_option("--model-noise", s.model_noise,
+                 "q: std of the model noise N(0, q^2 I) after every interval (0: deterministic)")
+      ->check(in_range(0.0, 1e6))
+      ->capture_default_str();
+  sub.add_option("--cycles", s.cycles,
+                 "Observation cycles (0: the setting's, 1000 or 1280, divided by --obs-every)")
       ->check(in_range(0, 100000000))
       ->capture_default_str();
   add_common_options(sub, cmd->ctx);
   set_examples(sub, {"implicit da --model lorenz63 --method etkf -N 10 --seeds 10",
                      "implicit da --method bootstrap -N 800 --jitter 0.3 --json",
                      "implicit da --model lorenz96 --dim 10 --method implicit -N 100 --jitter 0.2",
-                     "implicit da --method implicit-smoother -N 30 --lag 3"});
+                     "implicit da --method implicit-smoother -N 30 --lag 3",
+                     "implicit da --model lorenz96 --obs-every 4 --model-noise 0.5 --method "
+                     "implicit -N 100"});
   sub.callback([cmd] {
     ThreadLimit limit(cmd->ctx.threads);
     const auto r = experiments::run_da(cmd->settings, cmd->ctx);
@@ -100,6 +131,7 @@ void setup_da(CLI::App& sub) {
       print_json(r);
     else
       print_da_text(r);
+    report_divergence(r);
   });
 }
 

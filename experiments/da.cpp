@@ -66,6 +66,10 @@ DaSetup lorenz96_setup(const DaSettings& s, std::uint64_t seed) {
   for (int i = 0; i < s.dim; ++i) x0(i) = s.forcing + rng.normal();
   da::Lorenz96::Workspace w(s.dim);
   l96.steps(x0, 0.05, 2000, w);
+  require(x0.allFinite(),
+          "da: the Lorenz-96 truth left the finite numbers while spinning up onto the attractor "
+          "(forcing F = {:g} is unstable with RK4 dt = 0.05)",
+          s.forcing);
   d.twin.truth0 = x0;
   d.twin.mean0 = x0;
   d.twin.cov0 = 0.001 * Eigen::MatrixXd::Identity(s.dim, s.dim);
@@ -110,6 +114,10 @@ da::TwinResult run_one(const DaSettings& s, const DaSetup& d, std::uint64_t seed
 DaSetup da_setup(const DaSettings& s, std::uint64_t seed) {
   require(s.cycles >= 0, "da: expected a number of cycles >= 0 (0: the setting's), got {}",
           s.cycles);
+  require(s.obs_every >= 1, "da: expected at least 1 model interval per observation, got {}",
+          s.obs_every);
+  require(std::isfinite(s.model_noise) && s.model_noise >= 0.0,
+          "da: expected a model noise std q >= 0, got {}", s.model_noise);
   DaSetup d;
   if (s.model == "lorenz63")
     d = lorenz63_setup(s);
@@ -119,6 +127,15 @@ DaSetup da_setup(const DaSettings& s, std::uint64_t seed) {
     throw InvalidArgument(
         fmt::format("da: expected the model lorenz63 or lorenz96, got '{}'", s.model));
   d.twin.seed = seed;
+  if (s.obs_every > 1 || s.model_noise > 0.0) {
+    const int n = d.problem.dim(), k = s.obs_every;
+    d.problem.steps_per_observation = k;
+    if (s.model_noise > 0.0)
+      d.problem.Q = s.model_noise * s.model_noise * Eigen::MatrixXd::Identity(n, n);
+    if (s.cycles == 0) d.twin.cycles = (d.twin.cycles + k - 1) / k;  // the same model time
+    d.twin.interval *= k;
+    d.setting = fmt::format("{}-k{}-q{:g}", d.setting, k, s.model_noise);
+  }
   return d;
 }
 
@@ -168,6 +185,7 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
   const DaSetup d = da_setup(s, ctx.seed);
   std::vector<double> rmse, spread, ess, ms, resamplings;
   long failures = 0;
+  int diverged = 0;
   nlohmann::json per_run = nlohmann::json::array();
   for (std::size_t r = 0; r < runs; ++r) {
     const auto& x = results[r];
@@ -177,15 +195,20 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
     ms.push_back(x.ms_per_cycle);
     resamplings.push_back(x.resamplings);
     failures += x.sampling_failures;
-    per_run.push_back({{"seed", ctx.seed + r},
-                       {"rmse_a", x.rmse_a},
-                       {"spread_a", x.spread_a},
-                       {"mean_ess", x.mean_ess},
-                       {"ms_per_cycle", x.ms_per_cycle}});
+    diverged += x.diverged_at > 0 ? 1 : 0;
+    per_run.push_back(
+        {{"seed", ctx.seed + r},
+         {"rmse_a", x.rmse_a},
+         {"spread_a", x.spread_a},
+         {"mean_ess", x.mean_ess},
+         {"ms_per_cycle", x.ms_per_cycle},
+         {"diverged_at_cycle", x.diverged_at > 0 ? nlohmann::json(x.diverged_at) : nullptr}});
   }
+  // A diverged run has no rmse.a, so neither has the setting: the summary is null (NaN), not a
+  // mean of the runs that stayed on track.
   const double mean = mean_of(rmse), sd = sd_of(rmse);
   nlohmann::json ci = nullptr;
-  if (runs >= 2) {
+  if (runs >= 2 && diverged == 0) {
     const double half = student_t975(s.seeds - 1) * sd / std::sqrt(static_cast<double>(runs));
     ci = {mean - half, mean + half};
   }
@@ -204,6 +227,8 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
       {"map", s.map},
       {"lag", is_smoother(s) ? nlohmann::json(smoother_options(s, ctx.seed).lag) : nullptr},
       {"starts", is_smoother(s) ? nlohmann::json(smoother_options(s, ctx.seed).starts) : nullptr},
+      {"obs_every", s.obs_every},
+      {"model_noise", s.model_noise},
       {"cycles", d.twin.cycles},
       {"burn_in", d.twin.burn_in},
       {"rmse_a", {{"mean", mean}, {"sd", sd}, {"ci95", ci}}},
@@ -212,6 +237,7 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
       {"ms_per_cycle", mean_of(ms)},
       {"resamplings_per_run", mean_of(resamplings)},
       {"sampling_failures", failures},
+      {"diverged_runs", diverged},
       {"runs", per_run},
       {"threads", active_threads()},
       {"seconds", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()}};

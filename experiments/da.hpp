@@ -31,6 +31,10 @@ struct DaSettings {
   int lag = 0;  ///< implicit-smoother: window length L in cycles (0: kDefaultLag); others: 0
   /// implicit-smoother: Newton starts per window (0: kDefaultStarts); others: 0.
   int starts = 0;
+  /// K: model intervals per observation (the setting's interval each; 1: the setting's own).
+  int obs_every = 1;
+  /// q: std of the model noise N(0, q^2 I) added after every interval (0: deterministic).
+  double model_noise = 0.0;
 };
 
 /// The implicit smoother's window length when --lag is not given.
@@ -39,19 +43,26 @@ inline constexpr int kDefaultLag = 3;
 inline constexpr int kDefaultStarts = 3;
 
 /// The problem and twin settings of a benchmark setting for `seed` (the Lorenz-96 truth starts
-/// from a state spun up from F + N(0, 1) noise drawn with the seed). Throws InvalidArgument for
-/// an unknown model, a dimension below 4 or a non-finite forcing.
+/// from a state spun up from F + N(0, 1) noise drawn with the seed). With obs_every K > 1 or a
+/// model noise q > 0 (the variant where implicit and optimal-proposal sampling differ), the
+/// setting observes after every K-th interval, adds N(0, q^2 I) after every interval, runs the
+/// same model time (the setting's cycles / K, rounded up) and is named "<setting>-k<K>-q<q>".
+/// Throws InvalidArgument for an unknown model, a dimension below 4, a non-finite forcing, K < 1
+/// or a negative or non-finite q.
 struct DaSetup {
   da::Problem problem;
   da::TwinSettings twin;
-  std::string setting;  ///< sakov2012 or bocquet2010
+  std::string setting;  ///< sakov2012 or bocquet2010, or the variant's name
 };
 DaSetup da_setup(const DaSettings& s, std::uint64_t seed);
 
 /// Keys: model, setting, dim, method, members, seeds, seed, jitter, regularisation, inflation,
-/// resample_threshold, map, lag and starts (implicit-smoother; null otherwise), cycles, burn_in,
+/// resample_threshold, map, lag and starts (implicit-smoother; null otherwise), obs_every,
+/// model_noise, cycles, burn_in,
 /// rmse_a {mean, sd, ci95 [lo, hi]}, spread_a, mean_ess, ms_per_cycle, resamplings_per_run,
-/// sampling_failures, runs [{seed, rmse_a, spread_a, mean_ess, ms_per_cycle}], threads, seconds.
+/// sampling_failures, diverged_runs, runs [{seed, rmse_a, spread_a, mean_ess, ms_per_cycle,
+/// diverged_at_cycle}], threads, seconds. A run whose filter diverged (TwinResult::diverged_at)
+/// has NaN scores (null in JSON), and so has the summary.
 nlohmann::json run_da(const DaSettings& s, const RunContext& ctx);
 
 /// The 0.975 quantile of Student's t with `df` degrees of freedom (df >= 1).

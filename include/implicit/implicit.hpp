@@ -45,6 +45,7 @@
 #include "implicit/da/filters.hpp"
 #include "implicit/da/lorenz.hpp"
 #include "implicit/da/model.hpp"
+#include "implicit/da/path_objective.hpp"
 #include "implicit/da/smoother.hpp"
 #include "implicit/da/twin.hpp"
 #include "implicit/filter/filter_options.hpp"

@@ -24,7 +24,8 @@ __all__ = ["Lorenz63", "Lorenz96", "run"]
 
 def run(model="lorenz63", method="etkf", members=10, seeds=10, seed=1, jitter=0.0,
         regularisation="iso", inflation=1.0, resample_threshold=0.5, map="linear", lag=None,
-        starts=None, cycles=0, dim=10, forcing=8.0, threads=None, progress=None):
+        starts=None, obs_every=1, model_noise=0.0, cycles=0, dim=10, forcing=8.0, threads=None,
+        progress=None):
     """Runs `implicit da` with these settings and returns its JSON result as a dict.
 
     Each argument is the flag of the same name (docs/cli.md, "implicit da"), with its default:
@@ -36,8 +37,11 @@ def run(model="lorenz63", method="etkf", members=10, seeds=10, seed=1, jitter=0.
     the filters); members N >= 2; seeds independent runs with the seeds seed,
     seed + 1, ...; jitter the regularisation's size (required > 0 for "implicit"),
     regularisation "iso" or "cov"; inflation >= 1 (enkf, etkf); resample_threshold in [0, 1]
-    (particle filters); map "linear" or "random" (implicit); cycles the observation cycles (0:
-    the setting's, 1000 or 1280). threads None or 0: all cores. progress, if given, is called
+    (particle filters); map "linear" or "random" (implicit); obs_every K >= 1, the model
+    intervals per observation, and model_noise q >= 0, the std of the noise N(0, q^2 I) after
+    every interval (K > 1 or q > 0: the variant "<setting>-k<K>-q<q>", where implicit and
+    optimal-proposal sampling differ); cycles the observation cycles (0: the setting's, 1000 or
+    1280, divided by K). threads None or 0: all cores. progress, if given, is called
     as progress(seeds done, seeds in all) with the interpreter's lock held, at most about 10
     times a second and once more with done = total at the end; an exception it raises stops the
     run (no other seed starts) and reaches the caller unchanged. The result does not depend on
@@ -46,7 +50,9 @@ def run(model="lorenz63", method="etkf", members=10, seeds=10, seed=1, jitter=0.
     Returns:
         dict with the keys of `implicit da --json` (rmse_a {mean, sd, ci95}, spread_a, mean_ess,
         runs [{seed, rmse_a, ...}], ...), the same numbers for the same seed; the timing keys
-        (ms_per_cycle, seconds) and threads differ from run to run.
+        (ms_per_cycle, seconds) and threads differ from run to run. A filter that diverged (its
+        analysis mean left the finite numbers) is no exception: diverged_runs counts those runs,
+        each gives its diverged_at_cycle, and their scores and the summary's are None.
 
     Raises:
         implicit.InvalidArgument (a ValueError) naming the argument, for a value the tool
@@ -57,7 +63,7 @@ def run(model="lorenz63", method="etkf", members=10, seeds=10, seed=1, jitter=0.
     settings = dict(model=model, method=method, members=members, seeds=seeds, jitter=jitter,
                     regularisation=regularisation, inflation=inflation,
                     resample_threshold=resample_threshold, map=map, lag=lag, starts=starts,
-                    cycles=cycles,
+                    obs_every=obs_every, model_noise=model_noise, cycles=cycles,
                     dim=dim,
                     forcing=forcing)
     return json.loads(_da._run(settings, seed, 0 if threads is None else threads, progress))

@@ -41,5 +41,7 @@ class Lorenz96:
 def run(model: str = "lorenz63", method: str = "etkf", members: int = 10, seeds: int = 10,
         seed: int = 1, jitter: float = 0.0, regularisation: str = "iso",
         inflation: float = 1.0, resample_threshold: float = 0.5, map: str = "linear",
-        lag: Optional[int] = None, starts: Optional[int] = None, cycles: int = 0, dim: int = 10, forcing: float = 8.0, threads: Optional[int] = None,
+        lag: Optional[int] = None, starts: Optional[int] = None, obs_every: int = 1,
+        model_noise: float = 0.0, cycles: int = 0, dim: int = 10, forcing: float = 8.0,
+        threads: Optional[int] = None,
         progress: Optional[Callable[[int, int], Any]] = None) -> dict[str, Any]: ...

@@ -9,7 +9,9 @@ Reads, as `implicit reproduce --only da --out <dir>` writes it:
                  one row per configuration (the 95 % interval is empty for a single seed;
                  DAPPER's value is empty where it lists none)
 
-One panel per setting (sakov2012: Lorenz-63; bocquet2010: Lorenz-96): rmse.a from 0 against N
+One panel per setting (sakov2012: Lorenz-63; bocquet2010: Lorenz-96; its variant
+bocquet2010-k4-q0.5, observed after every 4th interval with model noise 0.5, where implicit and
+optimal-proposal sampling differ): rmse.a from 0 against N
 on a log axis (a two-seed interval can reach below 0), a line per method through its
 configurations with the interval as error bars, and DAPPER's value for the same method and N as
 an open marker in the method's colour.
@@ -20,7 +22,8 @@ import numpy as np
 from common import COLORS, DataError, figure_main, load_csv, save, subplots
 
 SETTINGS = (("sakov2012", "Lorenz-63 (sakov2012)"),
-            ("bocquet2010", "Lorenz-96, n = 10 (bocquet2010)"))
+            ("bocquet2010", "Lorenz-96, n = 10 (bocquet2010)"),
+            ("bocquet2010-k4-q0.5", "Lorenz-96, observed every 4th interval, q = 0.5"))
 METHODS = (("etkf", "ETKF", COLORS["ekf"], "s"),
            ("enkf", "EnKF (perturbed obs.)", COLORS["fastslam1"], "D"),
            ("bootstrap", "bootstrap PF", COLORS["standard"], "o"),
@@ -37,7 +40,7 @@ def draw(d):
             raise DataError(f"{d}/table_da.csv:{i + 2}: expected a setting in "
                             f"{', '.join(dict(SETTINGS))} and a method in {', '.join(sorted(known))}, "
                             f"got '{setting}', '{method}'")
-    fig, ax = subplots(1, 2, width=12, height=4.8)
+    fig, ax = subplots(1, 3, width=17, height=4.8)
     for a, (setting, title) in zip(ax, SETTINGS):
         drawn = False
         for method, name, color, marker in METHODS:

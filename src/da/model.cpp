@@ -92,6 +92,9 @@ void Problem::validate() const {
   require(H.allFinite(), "observation operator H: expected finite entries, got a NaN or inf");
   require_spd(R, static_cast<int>(H.rows()), "observation noise R");
   if (stochastic()) require_spd(Q, n, "model noise Q");
+  require(steps_per_observation >= 1,
+          "data assimilation problem: expected at least 1 model interval per observation, got {}",
+          steps_per_observation);
 }
 
 void require_observation(const Problem& p, const Eigen::VectorXd& y, long cycle) {

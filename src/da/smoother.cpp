@@ -40,6 +40,10 @@ void SmootherOptions::validate(const Problem& p) const {
   require(!p.stochastic(),
           "implicit smoother: the window's F assumes a perfect model, but the problem has model "
           "noise Q");
+  require(p.steps_per_observation == 1,
+          "implicit smoother: expected one model interval per observation (a perfect model over "
+          "longer intervals is one longer interval), got {}",
+          p.steps_per_observation);
 }
 
 void WindowTerms::set_log_norm() {

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Cholesky>
 
@@ -55,18 +56,28 @@ TwinResult run_twin_with(const Problem& p, Assimilator& filter, const TwinSettin
   double rmse_sum = 0.0, spread_sum = 0.0, ess_sum = 0.0, seconds = 0.0;
   for (int k = 1; k <= s.cycles; ++k) {
     const auto step = static_cast<std::uint64_t>(k);
-    p.model->forecast(truth, w);
-    if (p.stochastic()) {
-      Rng rng({s.seed, step, 1, purpose::kData});
-      rng.fill_normal(z_model);
-      truth += lq * z_model;
+    for (int i = 0; i < p.steps_per_observation; ++i) {
+      p.model->forecast(truth, w);
+      if (p.stochastic()) {  // interval i's noise: stream (seed, k, 1 + i, kData)
+        Rng rng({s.seed, step, 1 + static_cast<std::uint64_t>(i), purpose::kData});
+        rng.fill_normal(z_model);
+        truth += lq * z_model;
+      }
     }
     Rng obs_rng({s.seed, step, 0, purpose::kData});
     obs_rng.fill_normal(z_obs);
+    require(truth.allFinite(),
+            "twin experiment: the truth is not finite at cycle {} (the model is unstable with "
+            "these settings)",
+            k);
     y = p.H * truth + lr * z_obs;
     const auto start = std::chrono::steady_clock::now();
     const Analysis& a = filter.assimilate(y);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!a.mean.allFinite()) {
+      r.diverged_at = k;
+      break;
+    }
     r.resamplings += a.resampled ? 1 : 0;
     r.sampling_failures += a.sampling_failures;
     if (s.keep_history) {
@@ -78,6 +89,11 @@ TwinResult run_twin_with(const Problem& p, Assimilator& filter, const TwinSettin
     rmse_sum += std::sqrt((a.mean - truth).squaredNorm() / n);
     spread_sum += a.spread;
     ess_sum += a.ess;
+  }
+  if (r.diverged_at > 0) {
+    r.rmse_a = r.spread_a = r.mean_ess = std::numeric_limits<double>::quiet_NaN();
+    r.ms_per_cycle = 1e3 * seconds / r.diverged_at;
+    return r;
   }
   r.rmse_a = rmse_sum / r.scored_cycles;
   r.spread_a = spread_sum / r.scored_cycles;

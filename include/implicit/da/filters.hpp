@@ -26,7 +26,10 @@
 //   F(x) = 1/2 |x - M(x')|^2_{Q^-1} + 1/2 |y - H x|^2_{R^-1} + 1/2 log det 2 pi Q
 //          + 1/2 log det 2 pi R,
 // minimised by core's Newton and sampled by the linear (or random) map with core's exact weight,
-// whose expectation over the reference variable is p(y | x'). A deterministic model has no Q: the
+// whose expectation over the reference variable is p(y | x'). With K = steps_per_observation > 1
+// intervals per observation, each with its noise Q, the variables are the K noises of the
+// member's path instead (path_objective.hpp), and the other filters forecast K noisy intervals.
+// A deterministic model has no Q: the
 // jitter plays its role, Q = jitter^2 I (isotropic), or Q = (jitter h)^2 C with C the weighted
 // covariance of the forecast ensemble of the cycle (covariance regularisation), and no jitter is
 // added after resampling.
@@ -42,6 +45,7 @@
 
 #include "implicit/core/types.hpp"
 #include "implicit/da/model.hpp"
+#include "implicit/da/path_objective.hpp"
 #include "implicit/filter/particle_engine.hpp"
 
 namespace implicit::da {
@@ -106,8 +110,12 @@ class EnsembleFilter {
  private:
   struct Slot {  // per-member scratch, reused every cycle
     ForecastWorkspace forecast;
-    Eigen::VectorXd noise, residual;
+    Eigen::VectorXd noise, residual, parent;
+    PathObjective::Scratch path;  ///< implicit filter over K > 1 intervals
   };
+  bool path_sampling() const {
+    return options_.method == Method::kImplicit && problem_.steps_per_observation > 1;
+  }
   void forecast_and_weigh(const Eigen::VectorXd& y);
   void ensemble_analysis(const Eigen::VectorXd& y);
   void read_off_and_resample();

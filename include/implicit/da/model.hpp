@@ -1,6 +1,7 @@
 #pragma once
-// A data-assimilation problem: the forecast model over one observation interval, its additive
-// noise Q (none for a deterministic model), and the linear observation y = H x + v, v ~ N(0, R).
+// A data-assimilation problem: the forecast model over one interval, its additive noise Q (none
+// for a deterministic model), and the linear observation y = H x + v, v ~ N(0, R), made after
+// every `steps_per_observation`-th interval (1: after every one).
 //
 //   auto model = std::make_shared<implicit::da::Lorenz63Model>(Lorenz63{}, 0.01, 25);
 //   implicit::da::Problem p{model, Eigen::MatrixXd::Identity(3, 3),   // H
@@ -96,12 +97,16 @@ struct Problem {
   Eigen::MatrixXd H;  ///< observation operator, p x n
   Eigen::MatrixXd R;  ///< observation noise covariance, p x p, SPD
   Eigen::MatrixXd Q;  ///< model noise covariance, n x n SPD, or empty: deterministic model
+  /// K: intervals (each followed by its own noise Q) from one observation to the next. With K > 1
+  /// and model noise, the state at an observation is a nonlinear function of K noises, so the
+  /// optimal proposal has no closed form (path_objective.hpp samples the K noises implicitly).
+  int steps_per_observation = 1;
 
   int dim() const { return model ? model->dim() : 0; }
   int obs_dim() const { return static_cast<int>(H.rows()); }
   bool stochastic() const { return Q.size() > 0; }
   /// Throws InvalidArgument for a missing model, H of the wrong width, R or Q of the wrong size,
-  /// not finite, not symmetric or not positive definite.
+  /// not finite, not symmetric or not positive definite, or steps_per_observation < 1.
   void validate() const;
 };
 

@@ -12,7 +12,8 @@
 //                                .truth0 = x0, .mean0 = x0, .cov0 = 2 I, .seed = 3};
 //   const auto r = implicit::da::run_twin(problem, options, s);   // r.rmse_a, r.spread_a
 //
-// Streams: observation noise (seed, k, 0, kData), truth model noise (seed, k, 1, kData) when the
+// Streams: observation noise (seed, k, 0, kData), truth model noise of the i-th interval
+// (i = 0..K-1, K = steps_per_observation) before observation k (seed, k, 1 + i, kData) when the
 // model is stochastic; the filter's own streams are keyed by the same seed with other purposes.
 
 #include <cstdint>
@@ -28,7 +29,7 @@ namespace implicit::da {
 
 struct TwinSettings {
   int cycles = 100;        ///< observation cycles
-  double interval = 1.0;   ///< model time per cycle
+  double interval = 1.0;   ///< model time per cycle (from one observation to the next)
   double burn_in = 0.0;    ///< cycles at times <= burn_in are not scored
   Eigen::VectorXd truth0;  ///< the truth at time 0
   Eigen::VectorXd mean0;   ///< initial ensemble N(mean0, cov0)
@@ -45,11 +46,16 @@ struct TwinResult {
   int resamplings = 0;
   long sampling_failures = 0;  ///< implicit: member-cycles with weight 0 from a failed sample
   double ms_per_cycle = 0.0;   ///< wall time of the filter (forecast + analysis) per cycle
+  /// The first cycle whose analysis mean is not finite (the filter diverged; 0: none). The run
+  /// stops there and its scores are NaN: a mean over the cycles before would not be a result.
+  int diverged_at = 0;
   std::vector<Eigen::VectorXd> truth, means;  ///< cycles 1..K (keep_history)
 };
 
 /// Runs the twin experiment; throws InvalidArgument for cycles < 1, a non-positive interval, a
-/// negative or NaN burn-in, a burn-in that leaves no cycle to score, or wrong sizes.
+/// negative or NaN burn-in, a burn-in that leaves no cycle to score, wrong sizes, or a truth
+/// that leaves the finite numbers (a model unstable at its settings). A filter that diverges is
+/// an outcome, not an error: see TwinResult::diverged_at.
 TwinResult run_twin(const Problem& p, const FilterOptions& o, const TwinSettings& s);
 /// The same twin experiment with the implicit smoother (smoother.hpp): the analysis scored at
 /// each cycle is its filtering analysis at the observation's time.
