@@ -59,7 +59,7 @@ const std::vector<DaRow>& rows() {
       // The variant bocquet2010-k4-q0.5: model noise, observed after every 4th interval, where
       // implicit and optimal-proposal sampling differ (no tuning: the noise keeps members apart).
       {"lorenz96", "bootstrap", 100, 0.0, 1.0, 0.5, "iso", 0, 10, 4, 0.5},
-      {"lorenz96", "bootstrap", 1000, 0.0, 1.0, 0.5, "iso", 0, 10, 4, 0.5},
+      {"lorenz96", "bootstrap", 800, 0.0, 1.0, 0.5, "iso", 0, 10, 4, 0.5},
       {"lorenz96", "bootstrap", 3000, 0.0, 1.0, 0.5, "iso", 0, 10, 4, 0.5},
       {"lorenz96", "implicit", 30, 0.0, 1.0, 0.5, "iso", 0, 10, 4, 0.5},
       {"lorenz96", "implicit", 100, 0.0, 1.0, 0.5, "iso", 0, 10, 4, 0.5},
