@@ -103,13 +103,8 @@ double implicit_path_move(const Problem& p, const PathTerms& t, PathObjective::S
   parent = x;
   const PathObjective f(p, t, parent, s);
   const Eigen::Index size = static_cast<Eigen::Index>(p.dim()) * t.steps;
-  // The Gauss-Newton Hessian makes the last iterations linear, not quadratic; the weight is
-  // exact at any mu, so the loop stops once the predicted decrease of F, half g^T H^-1 g, is
-  // below 5e-9 (on the Lorenz-96 variant: 4.4 instead of 10 iterations, F within 4e-9).
-  NewtonOptions options;
-  options.decrement_tolerance = 1e-8;
-  const auto r =
-      newton_minimize<DenseFactor<Eigen::Dynamic>>(f, Eigen::VectorXd::Zero(size), options);
+  const auto r = newton_minimize<DenseFactor<Eigen::Dynamic>>(f, Eigen::VectorXd::Zero(size),
+                                                              path_newton_options());
   Eigen::VectorXd w(size);
   const double log_w = implicit_draw(f, r, rng, map, w, failed);
   if (!failed) f.end_state(w, x);

@@ -37,6 +37,12 @@ void prepare_scratch(const Problem& p, PathObjective::Scratch& s) {
   s.hg.resize(m, n * k);
 }
 
+NewtonOptions path_newton_options() {
+  NewtonOptions options;
+  options.decrement_tolerance = 1e-8;
+  return options;
+}
+
 void PathObjective::end_state(const Vector& w, Eigen::VectorXd& x) const {
   const Problem& p = *p_;
   const int n = p.dim();

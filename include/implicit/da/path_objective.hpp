@@ -30,6 +30,7 @@
 
 #include <Eigen/Core>
 
+#include "implicit/core/newton.hpp"
 #include "implicit/da/model.hpp"
 
 namespace implicit::da {
@@ -80,5 +81,12 @@ class PathObjective {
 
 /// Sizes a scratch for problem p.
 void prepare_scratch(const Problem& p, PathObjective::Scratch& s);
+
+/// The implicit filter's Newton options for a path: the defaults, and a stop once the predicted
+/// decrease of F, half g^T H^-1 g, is below 5e-9. The Gauss-Newton Hessian makes the last
+/// iterations linear, not quadratic, so the default gradient tolerance alone takes about twice
+/// the iterations for a minimum that moves F by less than that; the weight is exact at any mode
+/// (bench_da, PathMove/decrement against PathMove/gradient).
+NewtonOptions path_newton_options();
 
 }  // namespace implicit::da
