@@ -108,6 +108,12 @@ void add_laser_options(CLI::App& sub, LaserCommand& l) {
                  "motion prior); the lowest minimum centres the proposal (weights stay exact)")
       ->check(in_range(1, 64))
       ->capture_default_str();
+  sub.add_option("--start-probe", s.implicit_start_probe,
+                 "laser, implicit: Newton iterations a further start runs before it must be below "
+                 "the best minimum found, else it is dropped (0: every start runs to convergence; "
+                 "weights stay exact either way)")
+      ->check(in_range(0, 20))
+      ->capture_default_str();
   sub.add_option("--defensive", s.implicit_defensive,
                  "laser, implicit (linear map): share of samples drawn from the motion prior "
                  "instead, weighted by the mixture's density (a particle survives when every "

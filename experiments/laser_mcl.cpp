@@ -49,6 +49,9 @@ void LaserMclSettings::validate() const {
   require(runs >= 1 && runs <= 100000, "laser MCL: expected 1 to 100000 runs, got {}", runs);
   require(implicit_starts >= 1 && implicit_starts <= 64,
           "laser MCL: expected 1 to 64 Newton starts per particle, got {}", implicit_starts);
+  require(implicit_start_probe >= 0 && implicit_start_probe <= 20,
+          "laser MCL: expected a start probe of 0 (off) to 20 Newton iterations, got {}",
+          implicit_start_probe);
   require(implicit_defensive >= 0 && implicit_defensive < 1,
           "laser MCL: expected a defensive share in [0, 1), got {}", implicit_defensive);
   require(implicit_defensive == 0 || implicit_map == filter::ImplicitMap::kLinear,
@@ -302,6 +305,7 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
       filter::ImplicitProposal p;
       p.map = settings.implicit_map;
       p.starts = settings.implicit_starts;
+      p.start_probe = settings.implicit_start_probe;
       p.defensive = settings.implicit_defensive;
       return run_one(settings, d, model, space, p, seed, first, last);
     };
@@ -368,6 +372,7 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
   j["start"] = to_string(s.start);
   j["estimate"] = to_string(s.estimate);
   j["implicit_starts"] = s.implicit_starts;
+  j["implicit_start_probe"] = s.implicit_start_probe;
   j["implicit_defensive"] = s.implicit_defensive;
   j["particles"] = s.particles;
   j["runs"] = s.runs;

@@ -125,6 +125,9 @@ struct LaserMclSettings {
   ProposalKind proposal = ProposalKind::kImplicit;
   filter::ImplicitMap implicit_map = filter::ImplicitMap::kLinear;
   int implicit_starts = 2;  ///< Newton starts per particle (ImplicitProposal::starts)
+  /// Iterations a further start runs before it must be below the best minimum
+  /// (ImplicitProposal::start_probe; 0: every start runs to convergence).
+  int implicit_start_probe = 0;
   /// Share of implicit samples drawn from the motion prior (ImplicitProposal::defensive).
   double implicit_defensive = 0.0;
   std::size_t particles = 100;

@@ -71,7 +71,7 @@ def scan_at(log, k):
 
 def run(data, proposal="implicit", particles=100, runs=10, seed=1, alphas=None,
         filter_alphas=None, map=None, start="known", max_updates=0, implicit_map="linear",
-        starts=2,
+        starts=2, start_probe=0,
         z_hit=0.5, z_rand=0.5, sigma_hit=0.2, max_dist=2.0, max_beams=60, laser_max_range=None,
         interpolation="bicubic", aggregation="product", laser_model="likelihood-field",
         z_short=0.05, z_max=0.05, lambda_short=0.1, update_min_d=0.25, update_min_a=0.2,
@@ -91,7 +91,9 @@ def run(data, proposal="implicit", particles=100, runs=10, seed=1, alphas=None,
     odometry's alpha1..alpha4 (--alphas; None: the tool's default) and filter_alphas the filter's
     (--filter-alphas; None: alphas); start "known" or "global" (--init); max_updates the first N
     updates (0: all); implicit_map "linear" or "random" (--implicit-map) and starts, the
-    implicit proposal's Newton starts per particle (--starts); z_hit, z_rand,
+    implicit proposal's Newton starts per particle (--starts) and start_probe, the Newton
+    iterations a further start runs before it must beat the best minimum (--start-probe); z_hit,
+    z_rand,
     sigma_hit [m], max_dist [m] (--laser-max-dist), max_beams, laser_max_range [m] (None: the
     log's), interpolation, aggregation; laser_model "likelihood-field" or "beam" (--laser-model:
     the beam model, spec §3.12, takes the bootstrap proposal only, z_hit, z_rand, sigma_hit,
@@ -122,7 +124,7 @@ def run(data, proposal="implicit", particles=100, runs=10, seed=1, alphas=None,
     settings = dict(
         data=data, proposal=proposal, particles=particles, runs=runs, seed=seed, alphas=alphas,
         filter_alphas=filter_alphas, map=map, start=start, max_updates=max_updates,
-        implicit_map=implicit_map, starts=starts, z_hit=z_hit, z_rand=z_rand, sigma_hit=sigma_hit,
+        implicit_map=implicit_map, starts=starts, start_probe=start_probe, z_hit=z_hit, z_rand=z_rand, sigma_hit=sigma_hit,
         max_dist=max_dist, max_beams=max_beams, laser_max_range=laser_max_range,
         interpolation=interpolation, aggregation=aggregation, laser_model=laser_model,
         z_short=z_short, z_max=z_max, lambda_short=lambda_short, update_min_d=update_min_d,

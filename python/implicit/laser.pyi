@@ -78,7 +78,8 @@ class ParticleFilter:
                  seed: int = 0, alphas: npt.ArrayLike = (0.2, 0.2, 0.2, 0.2),
                  laser: Union[dict[str, Any], BeamModel, None] = None,
                  resample_threshold: float = 0.5,
-                 starts: int = 2, **laser_keywords: Any) -> None: ...
+                 starts: int = 2, start_probe: int = 0,
+                 **laser_keywords: Any) -> None: ...
     def initialize(self, mean: npt.ArrayLike, covariance: npt.ArrayLike) -> None: ...
     def step(self, u: npt.ArrayLike, ranges: Optional[npt.ArrayLike] = None,
              angle_min: Optional[float] = None, angle_increment: Optional[float] = None,
@@ -94,7 +95,7 @@ def run(data: Path, proposal: str = "implicit", particles: int = 100, runs: int 
         seed: int = 1, alphas: Optional[npt.ArrayLike] = None,
         filter_alphas: Optional[npt.ArrayLike] = None, map: Optional[Path] = None,
         start: str = "known", max_updates: int = 0, implicit_map: str = "linear",
-        starts: int = 2,
+        starts: int = 2, start_probe: int = 0,
         z_hit: float = 0.5, z_rand: float = 0.5, sigma_hit: float = 0.2, max_dist: float = 2.0,
         max_beams: int = 60, laser_max_range: Optional[float] = None,
         interpolation: str = "bicubic", aggregation: str = "product",

@@ -111,7 +111,7 @@ PyLaserFilter make_filter(const py::object& grid, const py::object& proposal,
                           const py::object& particles, const py::object& seed,
                           const py::object& alphas, const py::object& laser,
                           const py::object& resample_threshold, const py::object& starts,
-                          const py::kwargs& kw) {
+                          const py::object& start_probe, const py::kwargs& kw) {
   const robot::OccupancyGrid& g = grid_arg(grid, "grid");
   const bool implicit = choice_arg(proposal, "proposal", {"implicit", "bootstrap"}) == "implicit";
   filter::FilterOptions o;
@@ -142,6 +142,7 @@ PyLaserFilter make_filter(const py::object& grid, const py::object& proposal,
   robot::LikelihoodFieldModel model(field, spec.params, spec.mount);
   filter::ImplicitProposal newton;
   newton.starts = static_cast<int>(int_arg(starts, "starts", 1, 64));
+  newton.start_probe = static_cast<int>(int_arg(start_probe, "start_probe", 0, 20));
   PyLaserFilter p;
   using Field = robot::LikelihoodFieldModel;
   if (implicit)
@@ -195,7 +196,8 @@ motion model and the likelihood field, with the implicit or the bootstrap propos
 model with the bootstrap proposal.
 
 ParticleFilter(grid, proposal="implicit", particles=100, seed=0, alphas=(0.2, 0.2, 0.2, 0.2),
-               laser=None, resample_threshold=0.5, starts=2, **laser_keywords)
+               laser=None, resample_threshold=0.5, starts=2, start_probe=0,
+               **laser_keywords)
 
 Args:
     grid: implicit.laser.OccupancyGrid, the map.
@@ -211,6 +213,9 @@ Args:
     starts: the implicit proposal's Newton starts per particle: the prediction and starts - 1
         draws from the motion prior; the lowest minimum centres the proposal (weights stay
         exact). Not used by the bootstrap proposal.
+    start_probe: Newton iterations a further start runs before it must be below the best
+        minimum found, else it is dropped (0: every start runs to convergence; the weights stay
+        exact either way).
 
 initialize(mean (3,), covariance (3, 3)) draws the particles; step(u, ranges=None, angle_min=None,
 angle_increment=None, range_min=0.0, range_max=None) moves them by the odometry increment u (3,)
@@ -233,7 +238,7 @@ void bind_filter(py::module_& m) {
       .def(py::init(&make_filter), py::arg("grid"), py::arg("proposal") = "implicit",
            py::arg("particles") = 100, py::arg("seed") = 0,
            py::arg("alphas") = py::make_tuple(0.2, 0.2, 0.2, 0.2), py::arg("laser") = py::none(),
-           py::arg("resample_threshold") = 0.5, py::arg("starts") = 2)
+           py::arg("resample_threshold") = 0.5, py::arg("starts") = 2, py::arg("start_probe") = 0)
       .def(
           "initialize",
           [](PyLaserFilter& p, const py::object& mean, const py::object& covariance) {
@@ -369,6 +374,7 @@ std::string run(const py::dict& kw, const py::object& progress) {
                        ? filter::ImplicitMap::kLinear
                        : filter::ImplicitMap::kRandom;
   s.implicit_starts = static_cast<int>(int_arg(arg("starts"), "starts", 1, 64));
+  s.implicit_start_probe = static_cast<int>(int_arg(arg("start_probe"), "start_probe", 0, 20));
   s.particles = static_cast<std::size_t>(
       particle_count_arg(arg("particles"), "particles", kMaxParticles, kPoseParticleBytes));
   s.runs = static_cast<int>(int_arg(arg("runs"), "runs", 1, 100000));

@@ -483,12 +483,14 @@ def test_run_passes_every_setting_as_the_cli(cli, aces):
     same_numbers(r, c)
     assert r["proposal"] == "bootstrap" and r["map"]["resolution"] == 0.1
     g = laser.run(aces, particles=200, runs=2, max_updates=40, start="global", global_updates=8,
-                  global_radius=0.6, implicit_map="random", starts=3)
+                  global_radius=0.6, implicit_map="random", starts=3, start_probe=3)
     c = cli("mcl", "--sensor", "laser", "--data", aces, "-M", "200", "--runs", "2",
             "--max-updates", "40", "--init", "global", "--global-updates", "8",
-            "--global-radius", "0.6", "--implicit-map", "random", "--starts", "3")
+            "--global-radius", "0.6", "--implicit-map", "random", "--starts", "3",
+            "--start-probe", "3")
     same_numbers(g, c)
     assert g["start"] == "global" and g["implicit_map"] == "random" and g["implicit_starts"] == 3
+    assert g["implicit_start_probe"] == 3
     t = laser.run(aces, particles=20, runs=1, max_updates=5, tracks=True)
     assert np.array(t["per_run"][0]["estimates"]).shape == (5, 3)
 

@@ -223,6 +223,8 @@ BAD = [
     (pf(interpolation="nearest"), r"^interpolation: the implicit proposal needs"),
     (pf(aggregation="cubed-sum"), r"^aggregation: the implicit proposal needs"),
     (pf(starts=0), r"^starts: expected an integer in \[1, 64\], got 0"),
+    (pf(start_probe=-1), r"^start_probe: expected an integer in \[0, 20\], got -1"),
+    (pf(start_probe=1.5), r"^start_probe: expected an integer"),
     (pf(resample_threshold=1.5), r"^resample_threshold: expected a number in \[0, 1\], got 1\.5"),
     # ... on the beam model: the bootstrap proposal only (the C++ filter's refusal, named)
     (pf(laser=BEAM), r"^proposal: the implicit proposal needs an observation model with "
@@ -254,6 +256,7 @@ BAD = [
     (run_with(max_updates=-1), r"^max_updates: expected an integer >= 0, got -1"),
     (run_with(implicit_map="curved"), r"^implicit_map: expected 'linear' or 'random'"),
     (run_with(starts=65), r"^starts: expected an integer in \[1, 64\], got 65"),
+    (run_with(start_probe=21), r"^start_probe: expected an integer in \[0, 20\], got 21"),
     (run_with(z_hit=-1), r"^z_hit: expected a finite number > 0"),
     (run_with(z_rand=math.nan), r"^z_rand: expected a finite number >= 0"),
     (run_with(sigma_hit=0), r"^sigma_hit: expected a finite number > 0"),

@@ -146,6 +146,15 @@ TEST(LaserMcl, OneUpdateMatchesTheGridIntegralForBothProposals) {
   ImplicitProposal defensive;
   defensive.defensive = 0.2;
   check(defensive, 4000);
+  // Further starts cut short after one or three iterations unless already below the best minimum
+  // (and then continued): the centre changes, the weights stay exact.
+  ImplicitProposal probed;
+  probed.starts = 4;
+  probed.start_probe = 1;
+  check(probed, 2000);
+  ImplicitProposal probed3;
+  probed3.start_probe = 3;
+  check(probed3, 2000);
 }
 
 TEST(LaserMcl, ImplicitSamplesCountFarMoreThanBootstrapSamplesForAnInformativeScan) {

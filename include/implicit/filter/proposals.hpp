@@ -145,6 +145,11 @@ struct ImplicitProposal {
   /// Observation models: Newton starts per particle, the prediction and starts - 1 draws from
   /// the prior; the lowest minimum centres the map (observation_proposals.hpp).
   int starts = 2;
+  /// Observation models: Newton from each further start runs at most this many iterations and
+  /// goes on only when it is already below the best minimum (observation_proposals.hpp,
+  /// "Probing"); 0 = every start runs to convergence. Off by default: with poor odometry it
+  /// loses more tracks (docs/performance.md, "Probing the further starts").
+  int start_probe = 0;
   /// Observation models, linear map: the share of samples drawn from the motion prior instead
   /// (a defensive mixture with exact weights, observation_proposals.hpp); 0 = none.
   double defensive = 0.0;
@@ -157,8 +162,8 @@ struct ImplicitProposal {
     if constexpr (robot::is_landmark_observation_v<Observation>)
       return detail::landmark_implicit_step(ctx, map, newton, previous, rng, next, st);
     else
-      return detail::implicit_step(ctx, map, scan_newton, starts, defensive, previous, rng, next,
-                                   st);
+      return detail::implicit_step(ctx, map, scan_newton, starts, start_probe, defensive, previous,
+                                   rng, next, st);
   }
 };
 
