@@ -6,23 +6,28 @@ OUT ?= out
 # The MPI build (docs/cluster.md) is on here, so that `make test` checks it against one process.
 # Both builds compile in batches (IMPLICIT_UNITY_BUILD): about 40 % less compile time from scratch.
 CMAKE_FLAGS ?= -DIMPLICIT_WITH_MPI=ON -DIMPLICIT_UNITY_BUILD=ON
+# Ninja when it is installed (scripts/install-deps.sh installs it): it starts a target's compiles
+# while the libraries it links are still being built, where Make waits for them, so both cores stay
+# busy (docs/design.md, "Build time"). A build folder keeps the generator it was made with.
+GENERATOR = $(if $(wildcard $(1)/CMakeCache.txt),,$(if $(shell command -v ninja),-G Ninja))
 # The sanitizer and fuzzing build (clang++ 14, ASan + UBSan, libFuzzer): docs/design.md, "Reliability".
 SANITIZE_DIR ?= build-sanitize
 SANITIZE_CXX ?= clang++-14
-# What the clang build compiles (the slow test programs do not exist there: IMPLICIT_SLOW_TESTS is
+# What the clang build compiles, the examples and benchmarks among it (`make test` leaves them
+# out; the slow test programs do not exist there: IMPLICIT_SLOW_TESTS is
 # off), and the ctest labels it leaves out. A narrower list, e.g. SANITIZE_TARGETS="implicit_cli
 # test_core", checks a part: ctest registers the other test programs as <program>_NOT_BUILT
 # placeholders, which test-sanitize leaves out by name.
 FUZZ_TARGETS = robot_log carpark slam_data results_json occupancy_map carmen_log resume_record \
   trajectory bag nav2_params
 SANITIZE_TARGETS ?= implicit_cli implicit_toy test_core test_filter test_control test_robot test_slam test_da test_apps \
-	$(addprefix fuzz_,$(FUZZ_TARGETS))
+	$(addprefix fuzz_,$(FUZZ_TARGETS)) examples benchmarks
 SANITIZE_EXCLUDE ?= slow|packaging|docs
 # Each fuzz target runs this many seconds in `make fuzz-smoke` (a smoke test: tens of thousands
 # of inputs per target; `make fuzz-smoke FUZZ_SECONDS=600` for a real session).
 FUZZ_SECONDS ?= 6
 
-.PHONY: all deps configure build test test-slow reproduce reproduce-quick crosscheck bench docs \
+.PHONY: all deps configure build build-tested test test-slow reproduce reproduce-quick crosscheck bench docs \
 	install format clean configure-sanitize test-sanitize fuzz-smoke docs-check
 
 all: build
@@ -31,18 +36,24 @@ deps:
 	@bash scripts/install-deps.sh
 
 configure: deps
-	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) > /dev/null
+	@cmake -S . -B $(BUILD_DIR) $(call GENERATOR,$(BUILD_DIR)) -DCMAKE_BUILD_TYPE=Release \
+	  $(CMAKE_FLAGS) > /dev/null
 
+# Everything: the library, the tool, the Python module, the tests, the examples and the benchmarks.
 build: configure
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target all examples benchmarks
+
+# What the tests run (all but the examples and the benchmarks, which CI compiles in test-sanitize).
+build-tested: configure
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
 # The slow test programs exist only in a build configured with IMPLICIT_SLOW_TESTS=ON, which
 # test-slow turns on (the build folder keeps it: its later builds compile them too, and `make test`
 # still leaves their tests out by label).
-test: build
+test: build-tested
 	@ctest --test-dir $(BUILD_DIR) -LE slow --output-on-failure -j $(JOBS)
 
-test-slow: build
+test-slow: build-tested
 	@cmake -S . -B $(BUILD_DIR) -DIMPLICIT_SLOW_TESTS=ON > /dev/null
 	@cmake --build $(BUILD_DIR) -j $(JOBS) --target tests_slow
 	@ctest --test-dir $(BUILD_DIR) -L slow --output-on-failure -j $(JOBS)
@@ -52,10 +63,11 @@ test-slow: build
 # library, and `make test` runs it; so are the documentation checks (label docs), whose example
 # programs `make test` builds and runs.
 configure-sanitize: deps
-	@CXX=$(SANITIZE_CXX) cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=Sanitize \
-	  -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -gline-tables-only" -DIMPLICIT_SANITIZE=ON \
-	  -DIMPLICIT_BUILD_FUZZERS=ON -DIMPLICIT_BUILD_BENCHMARKS=OFF -DIMPLICIT_BUILD_PYTHON=OFF \
-	  -DIMPLICIT_BUILD_EXAMPLES=OFF $(CMAKE_FLAGS) -DIMPLICIT_WITH_MPI=OFF > /dev/null
+	@CXX=$(SANITIZE_CXX) cmake -S . -B $(SANITIZE_DIR) $(call GENERATOR,$(SANITIZE_DIR)) \
+	  -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -gline-tables-only" \
+	  -DIMPLICIT_SANITIZE=ON -DIMPLICIT_BUILD_FUZZERS=ON -DIMPLICIT_BUILD_BENCHMARKS=ON \
+	  -DIMPLICIT_BUILD_PYTHON=OFF -DIMPLICIT_BUILD_EXAMPLES=ON $(CMAKE_FLAGS) \
+	  -DIMPLICIT_WITH_MPI=OFF > /dev/null
 
 # The slowest sanitized test starts first instead of running alone at the end: on a fresh build
 # ctest knows no costs, so one is seeded (ctest's own cost file, kept if present).
@@ -91,10 +103,10 @@ fuzz-smoke: configure-sanitize
 	  grep -E "^#[0-9]+ +DONE|stat::number_of_executed_units" $(SANITIZE_DIR)/fuzz-artifacts/$$t.log; \
 	done
 
-reproduce: build
+reproduce: build-tested
 	@$(BUILD_DIR)/apps/implicit reproduce --out $(OUT)
 
-reproduce-quick: build
+reproduce-quick: build-tested
 	@$(BUILD_DIR)/apps/implicit reproduce --quick --out $(OUT)
 
 # The independent numpy implementations (python/crosscheck/) against the reference numbers the
@@ -102,7 +114,7 @@ reproduce-quick: build
 # run, which also carries Table 4's closed-form expectations; every results.json carries the
 # reference numbers, Table 5's among them). Sizes: docs/reproducing.md.
 CROSSCHECK_OUT ?= $(BUILD_DIR)/crosscheck
-crosscheck: build
+crosscheck: build-tested
 	@$(BUILD_DIR)/apps/implicit reproduce --quick --only himmelblau --no-figures \
 	  --out $(CROSSCHECK_OUT) > /dev/null
 	@echo "== double slit (Table 2), 500 runs per cell =="
@@ -129,7 +141,7 @@ docs: configure
 
 # Every documentation check, the slow ones too: each number a doc states beside a `numbers slow:`
 # comment is rerun with its command (some take minutes; docs/design.md, "Numbers in the docs").
-docs-check: build
+docs-check: build-tested
 	@ctest --test-dir $(BUILD_DIR) -L docs --output-on-failure -j $(JOBS)
 
 # Installs the library, headers, CMake and pkg-config files, the CLI, the Python module, the data

@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake
+  build-essential cmake ninja-build
   libeigen3-dev libtbb-dev libcli11-dev nlohmann-json3-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev librandom123-dev pybind11-dev
   python3 python3-dev python3-numpy python3-matplotlib python3-pytest zlib1g-dev
