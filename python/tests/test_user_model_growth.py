@@ -69,9 +69,11 @@ def grid_filter(ys, lo=-60.0, hi=60.0, n=3001):
     p = np.exp(gauss_logpdf(x, P0))
     means = []
     for t, y in enumerate(ys, start=1):
-        # predict: p(x_t) = sum_x' p(x_t | x') p(x') dx'
-        k = np.exp(gauss_logpdf(x[:, None] - drift(t, x)[None, :], V))
-        p = k @ p * dx
+        # predict: p(x_t) = sum_x' p(x_t | x') p(x') dx', over the x' where p is not negligible
+        # (below 1e-30 of its peak: the mass left out cannot move a mean by 1e-20)
+        live = p > 1e-30 * p.max()
+        k = np.exp(gauss_logpdf(x[:, None] - drift(t, x[live])[None, :], V))
+        p = k @ p[live] * dx
         p *= np.exp(gauss_logpdf(y - x * x / 20.0, W))
         p /= p.sum() * dx
         means.append((x * p).sum() * dx)
