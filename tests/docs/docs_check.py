@@ -76,6 +76,28 @@ def write_if_changed(path, text):
         path.write_text(text, encoding="utf-8")
 
 
+def joined_program(name, origin, text):
+    """The C++ program `text` as one part of the single program that runs every C++ snippet
+    (tests/docs/CMakeLists.txt): its #include lines first, the rest in namespace `name` with
+    `int main() {` renamed `int program() {` (and a `return 0;` at its end, which main has
+    implicitly), then `int NAME_main()` calling it. None when the snippet does not have that
+    shape (includes at the top, main last): it is then built as a program of its own."""
+    lines = text.rstrip("\n").split("\n")
+    includes = [l for l in lines if l.startswith("#include")]
+    body = [l for l in lines if not l.startswith("#include")]
+    if any(l.startswith("#") for l in body) or body.count("int main() {") != 1 or body[-1] != "}":
+        return None
+    start = body.index("int main() {")
+    if any(l and not l[0].isspace() for l in body[start + 1:-1]):
+        return None  # something after main at file scope
+    body[start] = "int program() {"
+    body.insert(len(body) - 1, "  return 0;")
+    return "\n".join([f"// {origin}: {name}.cpp as a part of the one program of the snippets"] +
+                     includes + [f"namespace {name} {{"] + body +
+                     [f"}}  // namespace {name}", f"int {name}_main() {{ return {name}::program(); }}",
+                      ""])
+
+
 def extract(args):
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -98,7 +120,13 @@ def extract(args):
                 prefix = "// " if PROGRAM_LANGUAGES[language] == "cpp" else "# "
                 write_if_changed(source, f"{prefix}{origin}:{line}\n{text}")
                 current = {"name": name, "source": source, "language": PROGRAM_LANGUAGES[language],
-                           "origin": f"{origin}:{line}", "expected": "", "tolerance": 0.0}
+                           "origin": f"{origin}:{line}", "expected": "", "tolerance": 0.0,
+                           "joined": ""}
+                joined = (joined_program(name, f"{origin}:{line}", text)
+                          if current["language"] == "cpp" else None)
+                if joined is not None:
+                    current["joined"] = out / f"{name}_joined.cpp"
+                    write_if_changed(current["joined"], joined)
                 manifest.append(current)
             elif language == "output":
                 if current is None:
@@ -109,8 +137,19 @@ def extract(args):
                 current["tolerance"] = parse_tolerance(origin, line, flags)
                 current = None
     rows = [f"{m['name']}|{m['source']}|{m['language']}|{m['origin']}|{m['expected']}|"
-            f"{m['tolerance']:g}" for m in manifest]
+            f"{m['tolerance']:g}|{m['joined']}" for m in manifest]
     write_if_changed(pathlib.Path(args.manifest), "\n".join(rows) + "\n")
+    # The one program's main: `doc_programs NAME` runs the snippet NAME.
+    joined = [m["name"] for m in manifest if m["joined"]]
+    write_if_changed(out / "doc_programs_main.cpp", "\n".join(
+        ["// The programs of the docs' C++ snippets in one executable: doc_programs NAME runs one.",
+         "#include <cstdio>", "#include <cstring>", ""] +
+        [f"int {n}_main();" for n in joined] +
+        ["", "int main(int argc, char** argv) {"] +
+        [f"  if (argc == 2 && std::strcmp(argv[1], \"{n}\") == 0) return {n}_main();"
+         for n in joined] +
+        ["  std::fprintf(stderr, \"usage: doc_programs NAME (a snippet of the docs)\\n\");",
+         "  return 2;", "}", ""]))
 
 
 def outputs_agree(got, expected, tolerance):
