@@ -150,6 +150,19 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
               s.lag);
       require(s.starts >= 0, "da: expected starts >= 1 (0: the default {}), got {}", kDefaultStarts,
               s.starts);
+      // The particle filters' options: accepted and ignored, they would read as used.
+      require(s.map == "linear",
+              "da: --map is the implicit particle filter's; the implicit smoother samples with "
+              "the linear map (got map '{}')",
+              s.map);
+      require(s.jitter == 0.0 && s.regularisation == "iso",
+              "da: --jitter and --regularisation are the particle filters'; the implicit "
+              "smoother has no regularisation (got jitter {}, regularisation '{}')",
+              s.jitter, s.regularisation);
+      require(s.resample_threshold == 0.5,
+              "da: --resample-threshold is the particle filters'; the implicit smoother does not "
+              "use it (got {})",
+              s.resample_threshold);
       da::ImplicitSmoother check(d.problem, smoother_options(s, ctx.seed));
       (void)check;
     } else {
