@@ -191,20 +191,20 @@ double implicit_step(const ObservationContext<Motion, Observation>& ctx, Map map
   // `probe` iterations first and goes on only if it is already below the best value.
   NewtonOptions probing = newton;
   if (probe > 0) probing.max_iterations = std::min(probe, newton.max_iterations);
+  const auto below_best = [&nr](const NewtonMinimum<SmallFactor<3>>& m) {
+    return m.factor_ok && std::isfinite(m.value) &&
+           (!nr.factor_ok || !std::isfinite(nr.value) || m.value < nr.value);
+  };
   for (int k = 1; k < starts; ++k) {
     const Vec<3> eta = rng.normal_vector<3>();
     const robot::Pose x0 = f + sigma1.matrixL() * eta;
     NewtonMinimum<SmallFactor<3>> other = newton_minimize<SmallFactor<3>>(obj, x0, probing);
     st.iterations += other.evaluations;
-    if (probe > 0 && other.status == MinimizeStatus::kMaxIterations && other.factor_ok &&
-        std::isfinite(other.value) &&
-        (!nr.factor_ok || !std::isfinite(nr.value) || other.value < nr.value)) {
+    if (probe > 0 && other.status == MinimizeStatus::kMaxIterations && below_best(other)) {
       other = newton_minimize<SmallFactor<3>>(obj, other.x, newton);
       st.iterations += other.evaluations;
     }
-    if (other.factor_ok && std::isfinite(other.value) &&
-        (!nr.factor_ok || !std::isfinite(nr.value) || other.value < nr.value))
-      nr = other;
+    if (below_best(other)) nr = other;
   }
   st.fallback = st.fallback || !nr.exact_factor;
   const bool usable_minimum = nr.factor_ok && nr.status != MinimizeStatus::kNonFinite &&
