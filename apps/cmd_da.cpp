@@ -104,6 +104,11 @@ void setup_da(CLI::App& sub) {
                  "implicit-smoother: Newton starts per window, the background and the heaviest "
                  "members (default 3; refused with the filters)")
       ->check(in_range(1, 1000));
+  sub.add_option("--bandwidth", s.bandwidth,
+                 "implicit-smoother: kernel bandwidth h in (0, 1]; below 1 every member gets its "
+                 "own kernel N(a x0_j + (1 - a) b, h^2 B) and Newton run (default 1: one Gaussian "
+                 "background; refused with the filters)")
+      ->check(in_range(0.0, 1.0));
   sub.add_option("--obs-every", s.obs_every,
                  "K: observe after every K-th model interval (the setting's interval each); "
                  "with --model-noise, where implicit and optimal-proposal sampling differ")

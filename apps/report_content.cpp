@@ -295,8 +295,9 @@ std::vector<std::string> write_table_csvs(const json& results, const std::filesy
   }
   {
     // Data assimilation beside DAPPER (apps/reproduce_da.cpp); figure 12 reads this file.
-    const std::vector<std::string> s = {
-        "setting", "method", "members", "jitter", "inflation", "resample_threshold", "lag"};
+    const std::vector<std::string> s = {"setting", "method",    "members",
+                                        "jitter",  "inflation", "resample_threshold",
+                                        "lag",     "bandwidth"};
     const std::vector<std::string> r = {"seeds",    "rmse_a_mean", "rmse_a_lo",    "rmse_a_hi",
                                         "spread_a", "mean_ess",    "ms_per_cycle", "dapper_rmse_a"};
     std::vector<std::string> columns = s;

@@ -25,6 +25,8 @@ std::string tuning(const json& s) {
   if (get(s, "resample_threshold").is_number() && s["resample_threshold"].get<double>() != 0.5)
     add(fmt::format("r = {}", s["resample_threshold"].get<double>()));
   if (get(s, "lag").is_number()) add(fmt::format("L = {}", s["lag"].get<int>()));
+  if (get(s, "bandwidth").is_number() && s["bandwidth"].get<double>() < 1.0)
+    add(fmt::format("kernels h = {}", s["bandwidth"].get<double>()));
   return t.empty() ? "—" : t;
 }
 

@@ -33,6 +33,7 @@ struct DaRow {
   int seeds = 10;
   int obs_every = 1;         ///< the variant: intervals per observation ...
   double model_noise = 0.0;  ///< ... and the model noise std q after each
+  double bandwidth = 1.0;    ///< implicit-smoother: kernel bandwidth h (1: Gaussian background)
 };
 
 // The measuring seeds of docs/cli.md's table are 101-110 for the tool's default --seed 1 (the
@@ -51,6 +52,7 @@ const std::vector<DaRow>& rows() {
       {"lorenz63", "implicit-smoother", 10, 0.0, 1.2, 0.5, "iso", 3},
       {"lorenz63", "implicit-smoother", 30, 0.0, 1.0, 0.5, "iso", 4},
       {"lorenz63", "implicit-smoother", 100, 0.0, 1.0, 0.5, "iso", 3},
+      {"lorenz63", "implicit-smoother", 100, 0.0, 1.03, 0.5, "iso", 3, 10, 1, 0.0, 0.6},
       {"lorenz96", "etkf", 10, 0.0, 1.05},
       {"lorenz96", "bootstrap", 100, 1.0, 1.0, 0.4, "cov"},
       {"lorenz96", "bootstrap", 800, 0.2},
@@ -106,6 +108,7 @@ experiments::DaSettings settings_of(const DaRow& r, bool quick) {
   s.seeds = quick ? 2 : r.seeds;
   s.obs_every = r.obs_every;
   s.model_noise = r.model_noise;
+  s.bandwidth = r.bandwidth;
   // Quick: past the burn-in (16 cycles of Lorenz-63, 400 of Lorenz-96; K times fewer for the
   // variant) and a little beyond.
   const int quick_cycles = std::string(r.model) == "lorenz63" ? 100 : 500;
@@ -141,30 +144,34 @@ void add_da(Plan& plan, bool quick) {
   for (const DaRow& row : rows()) {
     if (quick && row.members > 100) continue;
     const experiments::DaSettings s = settings_of(row, quick);
-    const json settings = {{"model", s.model},
-                           {"setting", setting_of(row)},
-                           {"method", s.method},
-                           {"members", s.members},
-                           {"jitter", s.jitter},
-                           {"inflation", s.inflation},
-                           {"resample_threshold", s.resample_threshold},
-                           {"regularisation", s.regularisation},
-                           {"lag", s.lag == 0 ? json(nullptr) : json(s.lag)},
-                           {"obs_every", s.obs_every},
-                           {"model_noise", s.model_noise},
-                           {"seeds", s.seeds},
-                           {"cycles", s.cycles}};
+    const json settings = {
+        {"model", s.model},
+        {"setting", setting_of(row)},
+        {"method", s.method},
+        {"members", s.members},
+        {"jitter", s.jitter},
+        {"inflation", s.inflation},
+        {"resample_threshold", s.resample_threshold},
+        {"regularisation", s.regularisation},
+        {"lag", s.lag == 0 ? json(nullptr) : json(s.lag)},
+        {"bandwidth", s.method == "implicit-smoother" ? json(s.bandwidth) : json(nullptr)},
+        {"obs_every", s.obs_every},
+        {"model_noise", s.model_noise},
+        {"seeds", s.seeds},
+        {"cycles", s.cycles}};
     configurations.push_back(settings);
     // Rough CPU seconds: about 3 us per member and cycle, 1000 cycles of Lorenz-63 or 1280 of
     // Lorenz-96 (quick: 100 or 500), times K for the variant's K intervals per cycle; the implicit
-    // filter's paths (Newton over 4 x 10 noises) about 200 us.
+    // filter's paths (Newton over 4 x 10 noises) about 200 us, the smoother's kernels (a Newton
+    // run per member) about 80 us.
     const double cycles = s.cycles > 0 ? s.cycles : 1000.0;
-    const double per_member =
-        std::string(row.method) == "implicit" && row.obs_every > 1 ? 2e-4 : 3e-6;
+    const double per_member = std::string(row.method) == "implicit" && row.obs_every > 1 ? 2e-4
+                              : row.bandwidth < 1.0                                      ? 8e-5
+                                                                                         : 3e-6;
     plan.configs.push_back(
         {"da",
-         fmt::format("da {}{} {} N={}", s.model, row.obs_every > 1 ? " (variant)" : "", s.method,
-                     s.members),
+         fmt::format("da {}{} {}{} N={}", s.model, row.obs_every > 1 ? " (variant)" : "", s.method,
+                     row.bandwidth < 1.0 ? fmt::format(" h={}", row.bandwidth) : "", s.members),
          settings, per_member * s.members * cycles * s.seeds, false,
          [row, quick](const RunContext& ctx) { return run_row(row, quick, ctx); }});
   }

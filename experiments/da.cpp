@@ -99,6 +99,7 @@ da::SmootherOptions smoother_options(const DaSettings& s, std::uint64_t seed) {
   o.lag = s.lag == 0 ? kDefaultLag : s.lag;
   o.starts = s.starts == 0 ? kDefaultStarts : s.starts;
   o.inflation = s.inflation;
+  o.bandwidth = s.bandwidth;
   o.seed = seed;
   return o;
 }
@@ -174,6 +175,10 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
               "da: --starts is the implicit smoother's number of Newton starts; method {} has "
               "none (got starts {})",
               s.method, s.starts);
+      require(s.bandwidth == 1.0,
+              "da: --bandwidth is the implicit smoother's kernel bandwidth; method {} has no "
+              "kernels (got bandwidth {})",
+              s.method, s.bandwidth);
       da::EnsembleFilter check(d.problem, filter_options(s, ctx.seed));
       (void)check;
     }
@@ -240,6 +245,7 @@ nlohmann::json run_da(const DaSettings& s, const RunContext& ctx) {
       {"map", s.map},
       {"lag", is_smoother(s) ? nlohmann::json(smoother_options(s, ctx.seed).lag) : nullptr},
       {"starts", is_smoother(s) ? nlohmann::json(smoother_options(s, ctx.seed).starts) : nullptr},
+      {"bandwidth", is_smoother(s) ? nlohmann::json(s.bandwidth) : nullptr},
       {"obs_every", s.obs_every},
       {"model_noise", s.model_noise},
       {"cycles", d.twin.cycles},

@@ -31,6 +31,8 @@ struct DaSettings {
   int lag = 0;  ///< implicit-smoother: window length L in cycles (0: kDefaultLag); others: 0
   /// implicit-smoother: Newton starts per window (0: kDefaultStarts); others: 0.
   int starts = 0;
+  /// implicit-smoother: kernel bandwidth h in (0, 1] (1: one Gaussian background); others: 1.
+  double bandwidth = 1.0;
   /// K: model intervals per observation (the setting's interval each; 1: the setting's own).
   int obs_every = 1;
   /// q: std of the model noise N(0, q^2 I) added after every interval (0: deterministic).
@@ -57,12 +59,11 @@ struct DaSetup {
 DaSetup da_setup(const DaSettings& s, std::uint64_t seed);
 
 /// Keys: model, setting, dim, method, members, seeds, seed, jitter, regularisation, inflation,
-/// resample_threshold, map, lag and starts (implicit-smoother; null otherwise), obs_every,
-/// model_noise, cycles, burn_in,
-/// rmse_a {mean, sd, ci95 [lo, hi]}, spread_a, mean_ess, ms_per_cycle, resamplings_per_run,
-/// sampling_failures, diverged_runs, runs [{seed, rmse_a, spread_a, mean_ess, ms_per_cycle,
-/// diverged_at_cycle}], threads, seconds. A run whose filter diverged (TwinResult::diverged_at)
-/// has NaN scores (null in JSON), and so has the summary.
+/// resample_threshold, map, lag, starts and bandwidth (implicit-smoother; null otherwise),
+/// obs_every, model_noise, cycles, burn_in, rmse_a {mean, sd, ci95 [lo, hi]}, spread_a, mean_ess,
+/// ms_per_cycle, resamplings_per_run, sampling_failures, diverged_runs, runs [{seed, rmse_a,
+/// spread_a, mean_ess, ms_per_cycle, diverged_at_cycle}], threads, seconds. A run whose filter
+/// diverged (TwinResult::diverged_at) has NaN scores (null in JSON), and so has the summary.
 nlohmann::json run_da(const DaSettings& s, const RunContext& ctx);
 
 /// The 0.975 quantile of Student's t with `df` degrees of freedom (df >= 1).

@@ -24,8 +24,8 @@ __all__ = ["Lorenz63", "Lorenz96", "run"]
 
 def run(model="lorenz63", method="etkf", members=10, seeds=10, seed=1, jitter=0.0,
         regularisation="iso", inflation=1.0, resample_threshold=0.5, map="linear", lag=None,
-        starts=None, obs_every=1, model_noise=0.0, cycles=0, dim=10, forcing=8.0, threads=None,
-        progress=None):
+        starts=None, bandwidth=1.0, obs_every=1, model_noise=0.0, cycles=0, dim=10, forcing=8.0,
+        threads=None, progress=None):
     """Runs `implicit da` with these settings and returns its JSON result as a dict.
 
     Each argument is the flag of the same name (docs/cli.md, "implicit da"), with its default:
@@ -34,7 +34,8 @@ def run(model="lorenz63", method="etkf", members=10, seeds=10, seed=1, jitter=0.
     observations), "etkf" or "implicit-smoother" (its window lag L in [1, 1000] cycles; None:
     the tool's default 3; refused with the filters) and starts (its Newton starts per window in
     [1, 1000]: the background and the heaviest members; None: the tool's default 3; refused with
-    the filters); members N >= 2; seeds independent runs with the seeds seed,
+    the filters) and bandwidth (its kernel bandwidth h in (0, 1]: below 1 a kernel per member;
+    refused below 1 with the filters); members N >= 2; seeds independent runs with the seeds seed,
     seed + 1, ...; jitter the regularisation's size (required > 0 for "implicit"),
     regularisation "iso" or "cov"; inflation >= 1 (enkf, etkf); resample_threshold in [0, 1]
     (particle filters); map "linear" or "random" (implicit); obs_every K >= 1, the model
@@ -63,7 +64,6 @@ def run(model="lorenz63", method="etkf", members=10, seeds=10, seed=1, jitter=0.
     settings = dict(model=model, method=method, members=members, seeds=seeds, jitter=jitter,
                     regularisation=regularisation, inflation=inflation,
                     resample_threshold=resample_threshold, map=map, lag=lag, starts=starts,
-                    obs_every=obs_every, model_noise=model_noise, cycles=cycles,
-                    dim=dim,
-                    forcing=forcing)
+                    bandwidth=bandwidth, obs_every=obs_every, model_noise=model_noise,
+                    cycles=cycles, dim=dim, forcing=forcing)
     return json.loads(_da._run(settings, seed, 0 if threads is None else threads, progress))

@@ -4,17 +4,19 @@
 Usage: /usr/bin/python3 python/plots/figure12.py <dir>
 
 Reads, as `implicit reproduce --only da --out <dir>` writes it:
-  table_da.csv   setting,method,members,jitter,inflation,resample_threshold,lag,seeds,
-                 rmse_a_mean,rmse_a_lo,rmse_a_hi,spread_a,mean_ess,ms_per_cycle,dapper_rmse_a:
-                 one row per configuration (the 95 % interval is empty for a single seed;
-                 DAPPER's value is empty where it lists none)
+  table_da.csv   setting,method,members,jitter,inflation,resample_threshold,lag,bandwidth,
+                 seeds,rmse_a_mean,rmse_a_lo,rmse_a_hi,spread_a,mean_ess,ms_per_cycle,
+                 dapper_rmse_a: one row per configuration (the 95 % interval is empty for a
+                 single seed; DAPPER's value is empty where it lists none; the bandwidth is the
+                 implicit smoother's, empty for the filters)
 
 One panel per setting (sakov2012: Lorenz-63; bocquet2010: Lorenz-96; its variant
 bocquet2010-k4-q0.5, observed after every 4th interval with model noise 0.5, where implicit and
 optimal-proposal sampling differ): rmse.a from 0 against N
 on a log axis (a two-seed interval can reach below 0), a line per method through its
-configurations with the interval as error bars, and DAPPER's value for the same method and N as
-an open marker in the method's colour.
+configurations with the interval as error bars (the implicit smoother with a kernel background,
+bandwidth below 1, is a line of its own), and DAPPER's value for the same method and N as an open
+marker in the method's colour.
 Writes <dir>/figure12.png and <dir>/figure12.svg.
 """
 import numpy as np
@@ -28,23 +30,28 @@ METHODS = (("etkf", "ETKF", COLORS["ekf"], "s"),
            ("enkf", "EnKF (perturbed obs.)", COLORS["fastslam1"], "D"),
            ("bootstrap", "bootstrap PF", COLORS["standard"], "o"),
            ("implicit", "implicit PF", COLORS["implicit"], "^"),
-           ("implicit-smoother", "implicit smoother", COLORS["implicit-rb"], "v"))
+           ("implicit-smoother", "implicit smoother", COLORS["implicit-rb"], "v"),
+           ("implicit-smoother-kernels", "implicit smoother, kernels", COLORS["fastslam2"], "P"))
+# The series of a row: its method, or the smoother's kernel variant (bandwidth below 1).
+KERNELS = "implicit-smoother-kernels"
 
 
 def draw(d):
-    t = load_csv(d, "table_da.csv", ["members", "rmse_a_mean", "rmse_a_lo", "rmse_a_hi",
-                                     "dapper_rmse_a"], ["setting", "method"])
-    known = {m for m, _, _, _ in METHODS}
+    t = load_csv(d, "table_da.csv", ["members", "bandwidth", "rmse_a_mean", "rmse_a_lo",
+                                     "rmse_a_hi", "dapper_rmse_a"], ["setting", "method"])
+    known = {m for m, _, _, _ in METHODS} - {KERNELS}
     for i, (setting, method) in enumerate(zip(t["setting"], t["method"])):
         if setting not in dict(SETTINGS) or method not in known:
             raise DataError(f"{d}/table_da.csv:{i + 2}: expected a setting in "
                             f"{', '.join(dict(SETTINGS))} and a method in {', '.join(sorted(known))}, "
                             f"got '{setting}', '{method}'")
+    series = np.where((t["method"] == "implicit-smoother") & (t["bandwidth"] < 1.0), KERNELS,
+                      t["method"])
     fig, ax = subplots(1, 3, width=17, height=4.8)
     for a, (setting, title) in zip(ax, SETTINGS):
         drawn = False
         for method, name, color, marker in METHODS:
-            rows = np.flatnonzero((t["setting"] == setting) & (t["method"] == method))
+            rows = np.flatnonzero((t["setting"] == setting) & (series == method))
             if rows.size == 0:
                 continue
             rows = rows[np.argsort(t["members"][rows], kind="stable")]

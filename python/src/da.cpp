@@ -44,6 +44,7 @@ constexpr DaRange kDaRanges[] = {
     {"resample_threshold", "--resample-threshold", 0.0, 1.0, false},
     {"lag", "--lag", 1, 1000, true},
     {"starts", "--starts", 1, 1000, true},
+    {"bandwidth", "--bandwidth", 0.0, 1.0, false},
     {"obs_every", "--obs-every", 1, 10000, true},
     {"model_noise", "--model-noise", 0.0, 1e6, false},
     {"cycles", "--cycles", 0, 100000000, true},
@@ -89,6 +90,7 @@ experiments::DaSettings da_settings(const py::dict& kw) {
   // with the filters, as the tool does.
   s.lag = da_setting(kw, "lag").is_none() ? 0 : da_int(kw, "lag");
   s.starts = da_setting(kw, "starts").is_none() ? 0 : da_int(kw, "starts");
+  s.bandwidth = da_number(kw, "bandwidth");
   s.obs_every = da_int(kw, "obs_every");
   s.model_noise = da_number(kw, "model_noise");
   s.cycles = da_int(kw, "cycles");

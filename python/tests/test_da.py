@@ -40,6 +40,9 @@ def without_timing(r):
     (dict(model="lorenz63", method="implicit-smoother", members=12, starts=1, cycles=30),
      ["--model", "lorenz63", "--method", "implicit-smoother", "-N", "12", "--starts", "1",
       "--cycles", "30"]),
+    (dict(model="lorenz63", method="implicit-smoother", members=12, bandwidth=0.6, cycles=30),
+     ["--model", "lorenz63", "--method", "implicit-smoother", "-N", "12", "--bandwidth", "0.6",
+      "--cycles", "30"]),
 ])
 def test_run_equals_the_cli_json(cli, kw, flags):
     py = implicit.da.run(seeds=2, seed=7, **kw)
@@ -50,6 +53,7 @@ def test_run_equals_the_cli_json(cli, kw, flags):
     assert py["seeds"] == 2 and len(py["runs"]) == 2 and py["cycles"] == kw["cycles"]
     smoother = kw["method"] == "implicit-smoother"
     assert py["starts"] == (kw.get("starts", 3) if smoother else None)
+    assert py["bandwidth"] == (kw.get("bandwidth", 1.0) if smoother else None)
 
 
 def test_run_does_not_depend_on_threads_or_progress():

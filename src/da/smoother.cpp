@@ -12,6 +12,7 @@
 #include "implicit/core/log_weight.hpp"
 #include "implicit/core/newton.hpp"
 #include "implicit/core/parallel.hpp"
+#include "implicit/core/resampling.hpp"
 #include "implicit/core/rng.hpp"
 
 namespace implicit::da {
@@ -27,6 +28,16 @@ void factor_background(const Eigen::MatrixXd& cov, Eigen::MatrixXd& lower) {
   covariance_factor(cov, lower);
 }
 
+/// Newton on a window's F: tight tolerances (n is small; the weight is exact at any point, but
+/// the proposal is best centred at the minimum).
+NewtonOptions window_newton_options() {
+  NewtonOptions opts;
+  opts.max_iterations = 50;
+  opts.gradient_tolerance = 1e-9;
+  opts.step_tolerance = 1e-11;
+  return opts;
+}
+
 }  // namespace
 
 void SmootherOptions::validate(const Problem& p) const {
@@ -37,6 +48,8 @@ void SmootherOptions::validate(const Problem& p) const {
   require(starts >= 1 && starts <= members + 1,
           "implicit smoother: expected between 1 and N + 1 = {} Newton starts, got {}", members + 1,
           starts);
+  require(bandwidth > 0.0 && bandwidth <= 1.0,
+          "implicit smoother: expected a kernel bandwidth h in (0, 1], got {}", bandwidth);
   require(!p.stochastic(),
           "implicit smoother: the window's F assumes a perfect model, but the problem has model "
           "noise Q");
@@ -112,6 +125,10 @@ ImplicitSmoother::ImplicitSmoother(Problem problem, SmootherOptions options)
   for (auto& s : scratch_) prepare_scratch(problem_, s);
   terms_.r_lower = problem_.R.llt().matrixL();
   order_.resize(count);
+  if (options_.bandwidth < 1.0) {
+    kernel_terms_.assign(count, terms_);
+    parents_.resize(count);
+  }
 }
 
 void ImplicitSmoother::initialize(const Eigen::VectorXd& mean, const Eigen::MatrixXd& cov) {
@@ -158,8 +175,12 @@ const Analysis& ImplicitSmoother::assimilate(const Eigen::VectorXd& y) {
   terms_.lag = static_cast<int>(std::min<long>(cycle_, options_.lag));
   terms_.y = y;
   fit_background();
-  minimise();
-  sample();
+  if (options_.bandwidth < 1.0) {
+    sample_kernels();
+  } else {
+    minimise();
+    sample();
+  }
   read_off();
   return analysis_;
 }
@@ -201,10 +222,7 @@ void ImplicitSmoother::minimise() {
   std::iota(order_.begin(), order_.end(), std::size_t{0});
   std::stable_sort(order_.begin(), order_.end(),
                    [&](std::size_t a, std::size_t c) { return weights_[a] > weights_[c]; });
-  NewtonOptions opts;
-  opts.max_iterations = 50;
-  opts.gradient_tolerance = 1e-9;
-  opts.step_tolerance = 1e-11;
+  const NewtonOptions opts = window_newton_options();
   const WindowObjective f(problem_, terms_, scratch_[0]);
   double best = kInfinity;
   bool found = false;
@@ -241,6 +259,54 @@ void ImplicitSmoother::sample() {
     const double fx = f.evaluate(x0_[j], nullptr, nullptr);
     end_[j] = s.state;
     log_w_[j] = implicit_log_weight(n, s.xi.squaredNorm(), fx, log_det_l_);
+  });
+}
+
+void ImplicitSmoother::sample_kernels() {
+  const int n = problem_.dim();
+  const auto c = static_cast<std::uint64_t>(cycle_);
+  const std::size_t count = x0_.size();
+  // The members are resampled first: a kernel of small weight would spend its Newton run and its
+  // draw where the posterior has almost no mass. Afterwards the mixture's weights are equal, and a
+  // draw's weight is its kernel's implicit weight alone.
+  Rng rng({options_.seed, c, 0, purpose::kResampling});
+  uniforms_.resize(uniforms_needed(ResamplingScheme::kSystematic, count));
+  for (double& u : uniforms_) u = rng.uniform();
+  resample(ResamplingScheme::kSystematic, weights_, uniforms_, count, ancestors_);
+  for (std::size_t j = 0; j < count; ++j) parents_[j] = x0_[ancestors_[j]];
+  analysis_.resampled = true;
+  const double h = options_.bandwidth, a = std::sqrt(1.0 - h * h);
+  const NewtonOptions opts = window_newton_options();
+  parallel_for(count, [&](std::size_t j) {
+    // Kernel j: N(a x0_j + (1 - a) b, h^2 B), the shrinkage that keeps the mixture's mean b and
+    // covariance B (Liu and West's kernel).
+    WindowTerms& t = kernel_terms_[j];
+    t.b = a * parents_[j] + (1.0 - a) * terms_.b;
+    t.b_lower = h * terms_.b_lower;
+    t.b_inv = terms_.b_inv / (h * h);
+    t.r_lower = terms_.r_lower;
+    t.y = terms_.y;
+    t.lag = terms_.lag;
+    t.set_log_norm();
+    WindowObjective::Scratch& s = scratch_[j];
+    const WindowObjective f(problem_, t, s);
+    const auto r = newton_minimize<DenseFactor<Eigen::Dynamic>>(f, t.b, opts);
+    Rng draws({options_.seed, c, j, purpose::kReference});
+    draws.fill_normal(s.xi);
+    double log_det = 0.0;
+    if (r.factor_ok && std::isfinite(r.value)) {  // x0 = mu + L^-T xi, the linear map
+      x0_[j] = s.xi;
+      r.factor.matrixL().transpose().template triangularView<Eigen::Upper>().solveInPlace(x0_[j]);
+      x0_[j] += r.x;
+      log_det = r.factor.log_det_L();
+    } else {  // no finite minimum: a draw of the kernel itself (the weight stays exact)
+      x0_[j] = t.b;
+      x0_[j].noalias() += t.b_lower * s.xi;
+      log_det = -log_det_lower(t.b_lower);
+    }
+    const double fx = f.evaluate(x0_[j], nullptr, nullptr);
+    end_[j] = s.state;
+    log_w_[j] = implicit_log_weight(n, s.xi.squaredNorm(), fx, log_det);
   });
 }
 

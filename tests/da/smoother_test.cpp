@@ -10,6 +10,7 @@
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
+#include "implicit/core/rng.hpp"
 #include "implicit/da/smoother.hpp"
 #include "implicit/da/twin.hpp"
 
@@ -86,6 +87,66 @@ TEST(ImplicitSmoother, LinearGaussianWindowMatchesClosedForm) {
   EXPECT_LT((an.mean - s.window_end_members().rowwise().mean()).norm(), 1e-9);
 }
 
+// Kernel background (bandwidth h < 1) on the linear model: the prior is the mixture
+// (1/N) sum_j N(c_j, h^2 B), c_j = a x_j + (1 - a) b, so the posterior is a Gaussian mixture whose
+// component j has the evidence N(y; G c_j, G h^2 B G^T + R) and the mean
+// mu_j = P (B_h^-1 c_j + G^T R^-1 y), P = (B_h^-1 + G^T R^-1 G)^-1 (G = H A). F of each kernel is
+// quadratic, so member j's weight is exactly its component's evidence (normalised) and its draw
+// an exact draw of N(mu_j, P).
+TEST(ImplicitSmoother, KernelWeightsAreTheComponentEvidencesOnALinearModel) {
+  const Problem p = lin_problem();
+  const int count = 3000;
+  const double h = 0.5, a = std::sqrt(1.0 - h * h);
+  SmootherOptions o{.members = count, .lag = 1, .inflation = 1.1, .bandwidth = h, .seed = 21};
+  ImplicitSmoother s(p, o);
+  MatrixXd x(3, count);
+  {  // members from a skewed cloud, so that the kernels' evidences differ
+    Rng rng({7, 0, 0, purpose::kInitial});
+    for (int j = 0; j < count; ++j) {
+      const double u = rng.normal(), v = rng.normal(), w = rng.normal();
+      x.col(j) = Eigen::Vector3d(u * u, v + 0.5 * u, 0.3 * w);
+    }
+  }
+  s.initialize(x);
+  const VectorXd y(Eigen::Vector2d(1.4, -0.2));
+  s.assimilate(y);  // cycle 1: window start 0, one interval; equal weights, so no member is lost
+  const VectorXd b = x.rowwise().mean();
+  const MatrixXd d = x.colwise() - b;
+  const MatrixXd bcov = d * d.transpose() / (count - 1.0) * o.inflation * o.inflation;
+  EXPECT_LT((s.background_mean() - b).norm(), 1e-10);
+  EXPECT_LT((s.background_cov() - bcov).norm(), 1e-10);
+  const MatrixXd g = p.H * lin_a();
+  const MatrixXd bh_inv = (h * h * bcov).inverse();
+  const MatrixXd r_inv = p.R.inverse();
+  const MatrixXd post = (bh_inv + g.transpose() * r_inv * g).inverse();
+  const Eigen::LLT<MatrixXd> s_llt(g * (h * h * bcov) * g.transpose() + p.R);
+  std::vector<double> log_evidence(count);
+  VectorXd mean = VectorXd::Zero(3);
+  double top = -1e300;
+  for (int j = 0; j < count; ++j) {
+    const VectorXd c = a * x.col(j) + (1.0 - a) * b;
+    const VectorXd r = y - g * c;
+    log_evidence[j] = -0.5 * r.dot(s_llt.solve(r));  // the shared constants cancel
+    top = std::max(top, log_evidence[j]);
+  }
+  std::vector<double> pi(count);
+  double total = 0.0;
+  for (int j = 0; j < count; ++j) total += pi[j] = std::exp(log_evidence[j] - top);
+  double sum_sq = 0.0;
+  for (int j = 0; j < count; ++j) {
+    pi[j] /= total;
+    sum_sq += pi[j] * pi[j];
+    mean += pi[j] * post * (bh_inv * (a * x.col(j) + (1.0 - a) * b) + g.transpose() * r_inv * y);
+  }
+  // Systematic resampling of equal weights keeps every member once, in order.
+  const auto w = s.weights();
+  for (int j = 0; j < count; ++j) EXPECT_NEAR(w[j], pi[j], 1e-9 * pi[j]) << j;
+  // The weighted mean of the members: one exact draw per component, so its error has the
+  // covariance (sum_j pi_j^2) P, and e^T ((sum pi^2) P)^-1 e ~ chi^2_3 (0.999 quantile 16.27).
+  const VectorXd e = s.members() * Eigen::Map<const VectorXd>(w.data(), count) - mean;
+  EXPECT_LT(e.dot(post.inverse() * e) / sum_sq, 16.27);
+}
+
 TEST(ImplicitSmoother, GradientMatchesFiniteDifferencesOnLorenz63) {
   Problem p{std::make_shared<Lorenz63Model>(Lorenz63{}, 0.01, 25), MatrixXd::Identity(3, 3),
             2.0 * MatrixXd::Identity(3, 3), MatrixXd()};
@@ -133,19 +194,22 @@ TEST(ImplicitSmoother, SameBitsForAnyThreadCount) {
                   .cov0 = 2.0 * MatrixXd::Identity(3, 3),
                   .seed = 5,
                   .keep_history = true};
-  const SmootherOptions o{.members = 40, .lag = 3, .inflation = 1.0, .starts = 3, .seed = 5};
-  TwinResult one, two;
-  {
-    ThreadLimit limit(1);
-    one = run_twin(p, o, ts);
+  for (const double h : {1.0, 0.6}) {  // the Gaussian background and the kernels
+    const SmootherOptions o{
+        .members = 40, .lag = 3, .inflation = 1.0, .starts = 3, .bandwidth = h, .seed = 5};
+    TwinResult one, two;
+    {
+      ThreadLimit limit(1);
+      one = run_twin(p, o, ts);
+    }
+    {
+      ThreadLimit limit(2);
+      two = run_twin(p, o, ts);
+    }
+    EXPECT_EQ(one.rmse_a, two.rmse_a) << h;
+    ASSERT_EQ(one.means.size(), two.means.size());
+    for (std::size_t k = 0; k < one.means.size(); ++k) EXPECT_EQ(one.means[k], two.means[k]) << h;
   }
-  {
-    ThreadLimit limit(2);
-    two = run_twin(p, o, ts);
-  }
-  EXPECT_EQ(one.rmse_a, two.rmse_a);
-  ASSERT_EQ(one.means.size(), two.means.size());
-  for (std::size_t k = 0; k < one.means.size(); ++k) EXPECT_EQ(one.means[k], two.means[k]);
 }
 
 TEST(ImplicitSmoother, BadInput) {
@@ -154,6 +218,9 @@ TEST(ImplicitSmoother, BadInput) {
   EXPECT_THROW(ImplicitSmoother(p, {.members = 1, .lag = 2}), InvalidArgument);
   EXPECT_THROW(ImplicitSmoother(p, {.members = 10, .lag = 2, .inflation = 0.5}), InvalidArgument);
   EXPECT_THROW(ImplicitSmoother(p, {.members = 10, .lag = 2, .starts = 0}), InvalidArgument);
+  for (const double h : {0.0, -0.5, 1.5, std::nan("")})
+    EXPECT_THROW(ImplicitSmoother(p, {.members = 10, .lag = 2, .bandwidth = h}), InvalidArgument)
+        << h;
   Problem noisy = p;
   noisy.Q = MatrixXd::Identity(3, 3);
   EXPECT_THROW(ImplicitSmoother(noisy, {.members = 10, .lag = 2}), InvalidArgument);

@@ -22,6 +22,14 @@
 // start where the smoothed distribution is narrow (nearly Gaussian). When k > L the members first
 // move one interval forward (the window shifts by one cycle).
 //
+// With a bandwidth h < 1 the background is a kernel mixture instead: the members are resampled
+// (systematic, uniforms (seed, k, 0, kResampling)) and member j is redrawn from its own
+// kernel's F, the background term 1/2 |x0 - c_j|^2_{(h^2 B)^-1}, c_j = a x0_j + (1 - a) b,
+// a = sqrt(1 - h^2) (the mixture keeps the members' mean and covariance), by its own Newton run
+// and the linear map with its exact weight. Each kernel is narrower than B, so its F is nearer
+// to quadratic and the samples keep the non-Gaussian shape the members carry; the cost is one
+// Newton run per member.
+//
 // Draws: initial members (seed, 0, j, kInitial), reference variables (seed, k, j, kReference).
 // Members are sampled in parallel with per-member scratch; every reduction is serial in member
 // order, so results are bit-identical for any number of threads.
@@ -43,10 +51,15 @@ struct SmootherOptions {
   int lag = 3;             ///< L, window length in observation cycles, at least 1
   double inflation = 1.0;  ///< multiplies the background's anomalies (B by its square), >= 1
   int starts = 3;          ///< Newton starts: b and the starts - 1 heaviest members, >= 1
+  /// h in (0, 1]. 1: one Gaussian background N(b, B) for every member. Below 1: a kernel
+  /// mixture, one kernel N(a x0_j + (1 - a) b, h^2 B) per member (a = sqrt(1 - h^2), so the
+  /// mixture keeps the members' mean and covariance), each with its own F and Newton.
+  double bandwidth = 1.0;
   std::uint64_t seed = 1;
 
   /// Throws InvalidArgument naming the option (N < 2, lag < 1, inflation < 1 or NaN, starts < 1
-  /// or > N + 1, a stochastic model: the smoother assumes a perfect model).
+  /// or > N + 1, bandwidth outside (0, 1], a stochastic model: the smoother assumes a perfect
+  /// model).
   void validate(const Problem& p) const;
 };
 
@@ -119,7 +132,8 @@ class ImplicitSmoother {
   /// The background of the last cycle: b and B (inflated).
   const Eigen::VectorXd& background_mean() const { return terms_.b; }
   const Eigen::MatrixXd& background_cov() const { return cov_; }
-  /// The minimiser mu of the last cycle's F.
+  /// The minimiser mu of the last cycle's F (bandwidth 1 only: the kernels' minima are not
+  /// kept, and this stays empty).
   const Eigen::VectorXd& mode() const { return mu_; }
   const SmootherOptions& options() const { return options_; }
 
@@ -127,6 +141,7 @@ class ImplicitSmoother {
   void fit_background();
   void minimise();
   void sample();
+  void sample_kernels();
   void read_off();
 
   Problem problem_;
@@ -134,7 +149,10 @@ class ImplicitSmoother {
   std::vector<Eigen::VectorXd> x0_, end_;  ///< members at the window start and at y's time
   std::vector<double> weights_, log_w_;
   std::vector<WindowObjective::Scratch> scratch_;
-  std::vector<std::size_t> order_;
+  std::vector<std::size_t> order_, ancestors_;
+  std::vector<WindowTerms> kernel_terms_;  ///< per member, for bandwidth < 1
+  std::vector<Eigen::VectorXd> parents_;
+  std::vector<double> uniforms_;
   WindowTerms terms_;
   Eigen::MatrixXd cov_, h_lower_;
   Eigen::VectorXd mu_;
