@@ -51,8 +51,16 @@ TEST(DaExperiment, Lorenz96SettingObservesEveryOtherComponent) {
   EXPECT_EQ(d.problem.H(4, 8), 1.0);
   EXPECT_EQ(d.problem.R(0, 0), 2.25);
   EXPECT_EQ(d.twin.cycles, 1280);
+  EXPECT_EQ(d.setting, "bocquet2010");
   s.dim = 11;  // odd n: indices 0, 2, ..., 10
   EXPECT_EQ(da_setup(s, 1).problem.obs_dim(), 6);
+  // Another n or F is another benchmark, never matched with the 10-variable DAPPER rows.
+  s.dim = 40;
+  EXPECT_EQ(da_setup(s, 1).setting, "bocquet2010-n40");
+  s.forcing = 10.0;
+  EXPECT_EQ(da_setup(s, 1).setting, "bocquet2010-n40-F10");
+  s.dim = 10;
+  EXPECT_EQ(da_setup(s, 1).setting, "bocquet2010-F10");
 }
 
 }  // namespace
