@@ -7,6 +7,7 @@
 #include <memory>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 
 #include "implicit/core/error.hpp"
 #include "implicit/core/parallel.hpp"
