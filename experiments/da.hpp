@@ -46,9 +46,9 @@ inline constexpr int kDefaultStarts = 3;
 
 /// The problem and twin settings of a benchmark setting for `seed` (the Lorenz-96 truth starts
 /// from a state spun up from F + N(0, 1) noise drawn with the seed). Lorenz-96 with n != 10 or
-/// F != 8 is named "bocquet2010-n<n>" and/or "-F<F>" (bocquet2010 is n = 10, F = 8). With obs_every K > 1 or a
-/// model noise q > 0 (the variant where implicit and optimal-proposal sampling differ), the
-/// setting observes after every K-th interval, adds N(0, q^2 I) after every interval, runs the
+/// F != 8 is named "bocquet2010-n<n>" and/or "-F<F>" (bocquet2010 is n = 10, F = 8). With obs_every
+/// K > 1 or a model noise q > 0 (the variant where implicit and optimal-proposal sampling differ),
+/// the setting observes after every K-th interval, adds N(0, q^2 I) after every interval, runs the
 /// same model time (the setting's cycles / K, rounded up) and is named "<setting>-k<K>-q<q>".
 /// Throws InvalidArgument for an unknown model, a dimension below 4, a non-finite forcing, K < 1
 /// or a negative or non-finite q.

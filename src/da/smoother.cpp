@@ -284,8 +284,7 @@ void ImplicitSmoother::sample_kernels() {
     t.b = a * parents_[j] + (1.0 - a) * terms_.b;
     t.b_lower = h * terms_.b_lower;
     t.b_inv = terms_.b_inv / (h * h);
-    t.r_lower = terms_.r_lower;
-    t.y = terms_.y;
+    t.y = terms_.y;  // r_lower was copied in the constructor
     t.lag = terms_.lag;
     t.set_log_norm();
     WindowObjective::Scratch& s = scratch_[j];
