@@ -95,7 +95,7 @@ double WindowObjective::evaluate(const Vector& x0, Vector* grad, Hessian* hess) 
   s.residual = t.y;
   s.residual.noalias() -= p.H * s.state;
   t.r_lower.triangularView<Eigen::Lower>().solveInPlace(s.residual);
-  s.dx = x0 - t.b;
+  s.dx = x0 - *b_;
   if (derivatives) {
     s.hr.noalias() = p.H * s.jacobian;  // L_R^-1 G, G = H dM^l/dx0
     t.r_lower.triangularView<Eigen::Lower>().solveInPlace(s.hr);
@@ -126,8 +126,8 @@ ImplicitSmoother::ImplicitSmoother(Problem problem, SmootherOptions options)
   terms_.r_lower = problem_.R.llt().matrixL();
   order_.resize(count);
   if (options_.bandwidth < 1.0) {
-    kernel_terms_.assign(count, terms_);
-    parents_.resize(count);
+    kernel_terms_.r_lower = terms_.r_lower;
+    centres_.resize(count);
   }
 }
 
@@ -273,23 +273,24 @@ void ImplicitSmoother::sample_kernels() {
   uniforms_.resize(uniforms_needed(ResamplingScheme::kSystematic, count));
   for (double& u : uniforms_) u = rng.uniform();
   resample(ResamplingScheme::kSystematic, weights_, uniforms_, count, ancestors_);
-  for (std::size_t j = 0; j < count; ++j) parents_[j] = x0_[ancestors_[j]];
   analysis_.resampled = true;
+  // Kernel j: N(a x0_j + (1 - a) b, h^2 B), the shrinkage that keeps the mixture's mean b and
+  // covariance B (Liu and West's kernel). The kernels share h^2 B, y and the lag; only the
+  // centres differ.
   const double h = options_.bandwidth, a = std::sqrt(1.0 - h * h);
+  for (std::size_t j = 0; j < count; ++j)
+    centres_[j] = a * x0_[ancestors_[j]] + (1.0 - a) * terms_.b;
+  WindowTerms& t = kernel_terms_;  // r_lower was set in the constructor
+  t.b_lower = h * terms_.b_lower;
+  t.b_inv = terms_.b_inv / (h * h);
+  t.y = terms_.y;
+  t.lag = terms_.lag;
+  t.set_log_norm();
   const NewtonOptions opts = window_newton_options();
   parallel_for(count, [&](std::size_t j) {
-    // Kernel j: N(a x0_j + (1 - a) b, h^2 B), the shrinkage that keeps the mixture's mean b and
-    // covariance B (Liu and West's kernel).
-    WindowTerms& t = kernel_terms_[j];
-    t.b = a * parents_[j] + (1.0 - a) * terms_.b;
-    t.b_lower = h * terms_.b_lower;
-    t.b_inv = terms_.b_inv / (h * h);
-    t.y = terms_.y;  // r_lower was copied in the constructor
-    t.lag = terms_.lag;
-    t.set_log_norm();
     WindowObjective::Scratch& s = scratch_[j];
-    const WindowObjective f(problem_, t, s);
-    const auto r = newton_minimize<DenseFactor<Eigen::Dynamic>>(f, t.b, opts);
+    const WindowObjective f(problem_, t, centres_[j], s);
+    const auto r = newton_minimize<DenseFactor<Eigen::Dynamic>>(f, centres_[j], opts);
     Rng draws({options_.seed, c, j, purpose::kReference});
     draws.fill_normal(s.xi);
     double log_det = 0.0;
@@ -299,7 +300,7 @@ void ImplicitSmoother::sample_kernels() {
       x0_[j] += r.x;
       log_det = r.factor.log_det_L();
     } else {  // no finite minimum: a draw of the kernel itself (the weight stays exact)
-      x0_[j] = t.b;
+      x0_[j] = centres_[j];
       x0_[j].noalias() += t.b_lower * s.xi;
       log_det = -log_det_lower(t.b_lower);
     }

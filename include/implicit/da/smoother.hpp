@@ -92,7 +92,12 @@ class WindowObjective {
 
   /// p and t must outlive the objective.
   WindowObjective(const Problem& p, const WindowTerms& t, Scratch& scratch)
-      : p_(&p), t_(&t), s_(&scratch) {}
+      : p_(&p), t_(&t), b_(&t.b), s_(&scratch) {}
+  /// The same F with the background centred at `centre` instead of t.b (a kernel of the
+  /// mixture: the members' kernels share t's covariance, observation and lag). centre must
+  /// outlive the objective.
+  WindowObjective(const Problem& p, const WindowTerms& t, const Vector& centre, Scratch& scratch)
+      : p_(&p), t_(&t), b_(&centre), s_(&scratch) {}
 
   /// F(x0); with grad / hess also its gradient and the Gauss-Newton Hessian. After the call
   /// scratch.state holds M^l(x0). +inf when the forecast leaves the finite numbers.
@@ -101,6 +106,7 @@ class WindowObjective {
  private:
   const Problem* p_;
   const WindowTerms* t_;
+  const Vector* b_;  ///< the background's centre
   Scratch* s_;
 };
 
@@ -150,8 +156,8 @@ class ImplicitSmoother {
   std::vector<double> weights_, log_w_;
   std::vector<WindowObjective::Scratch> scratch_;
   std::vector<std::size_t> order_, ancestors_;
-  std::vector<WindowTerms> kernel_terms_;  ///< per member, for bandwidth < 1
-  std::vector<Eigen::VectorXd> parents_;
+  WindowTerms kernel_terms_;              ///< the kernels' shared terms (bandwidth < 1) ...
+  std::vector<Eigen::VectorXd> centres_;  ///< ... and each member's kernel centre
   std::vector<double> uniforms_;
   WindowTerms terms_;
   Eigen::MatrixXd cov_, h_lower_;
