@@ -33,6 +33,7 @@ struct MapCommand {
   RunContext ctx;            ///< --json, and --out: here the map's YAML FILE
   double resolution = 0.05;  ///< [m]
   double max_range = 40.0;   ///< [m]; 0: each scan's range_max
+  int min_echoes = 2;        ///< robot::GridMappingOptions::min_echoes
   BagFlags bag;              ///< a ROS bag as --data: topics and frames
   std::string pose_topic;    ///< a bag's geometry_msgs/PoseStamped topic; empty: its odometry
 };
@@ -144,6 +145,7 @@ void run_map(const MapCommand& c) {
   robot::GridMappingOptions options;
   options.resolution = c.resolution;
   options.max_range = c.max_range;
+  options.min_echoes = c.min_echoes;
   const robot::OccupancyGrid grid = naming("--data " + c.data, [&] {
     return robot::build_map(robot_poses, log.scans, laser_mount, options);
   });
@@ -164,6 +166,7 @@ void run_map(const MapCommand& c) {
                 {"scans_outside_poses", in.scans_outside_poses},
                 {"resolution", grid.resolution()},
                 {"max_range", c.max_range},
+                {"min_echoes", c.min_echoes},
                 {"mount", {laser_mount.x, laser_mount.y, laser_mount.yaw}},
                 {"width", grid.width()},
                 {"height", grid.height()},
@@ -226,6 +229,11 @@ void setup_map(CLI::App& sub) {
                  "[m] beams are used up to this range; longer readings only clear cells (0: "
                  "each scan's no-return range)")
       ->check(in_range(0.0, 1000.0))
+      ->capture_default_str();
+  sub.add_option("--min-echoes", cmd->min_echoes,
+                 "a cell where beams of this many scans ended is occupied, whatever the beams "
+                 "that crossed it (0: log-odds only; docs/cli.md)")
+      ->check(in_range(0, 255))
       ->capture_default_str();
   set_examples(sub, {"implicit map --data data/carmen/aces-corrected.log.gz --out aces.yaml",
                      "implicit map --data data/carmen/intel-corrected.log.gz --out intel.yaml "

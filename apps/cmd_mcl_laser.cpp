@@ -86,6 +86,11 @@ void add_laser_options(CLI::App& sub, LaserCommand& l) {
                  "laser: [m] cell size of the map built from the reference poses (no map file)")
       ->check(in_range(0.005, 1.0))
       ->capture_default_str();
+  sub.add_option("--map-min-echoes", s.data.map_min_echoes,
+                 "laser: a cell of the built map where beams of this many scans ended is occupied, "
+                 "whatever the beams that crossed it (0: log-odds only)")
+      ->check(in_range(0, 255))
+      ->capture_default_str();
   sub.add_option("--max-updates", s.data.max_updates, "laser: use the first N updates (0: all)")
       ->check(in_range(0, 100000000));
   sub.add_option("--estimate", l.estimate,

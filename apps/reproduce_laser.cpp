@@ -114,6 +114,7 @@ void add_laser_mcl(Plan& plan, bool quick) {
       {"tracking", tracking},
       {"global", global},
       {"map_resolution_m", d.data.map_resolution},
+      {"map_min_echoes", d.data.map_min_echoes},
       {"update_min_d_m", d.data.update_min_d},
       {"update_min_a_rad", d.data.update_min_a},
       {"odometry_alphas", {a.alpha1, a.alpha2, a.alpha3, a.alpha4}},

@@ -64,6 +64,8 @@ void LaserDataOptions::validate() const {
           "laser data: expected a map resolution in [0.005, 1] m, got {}", map_resolution);
   require(map_max_range > 0 && std::isfinite(map_max_range),
           "laser data: expected a positive mapping range, got {}", map_max_range);
+  require(map_min_echoes >= 0 && map_min_echoes <= 255,
+          "laser data: expected map_min_echoes in [0, 255] (0: off), got {}", map_min_echoes);
   require(update_min_d >= 0 && std::isfinite(update_min_d),
           "laser data: expected update_min_d >= 0 [m], got {}", update_min_d);
   require(update_min_a >= 0 && std::isfinite(update_min_a),
@@ -197,6 +199,7 @@ LaserDataset load_carmen(const LaserDataOptions& options, const robot::CarmenLog
     robot::GridMappingOptions m;
     m.resolution = options.map_resolution;
     m.max_range = options.map_max_range;
+    m.min_echoes = options.map_min_echoes;
     d.map = robot::build_map(robot_poses, log.scans, d.mount, m);
     d.map_built = true;
   } else {

@@ -102,6 +102,7 @@ struct LaserDataOptions {
   std::filesystem::path map;
   double map_resolution = 0.05;  ///< [m] of the built map
   double map_max_range = 40.0;   ///< [m] beams longer than this only clear space in the built map
+  int map_min_echoes = 2;        ///< the built map's robot::GridMappingOptions::min_echoes (0: off)
   double update_min_d = 0.25;    ///< [m] nav2's update_min_d
   double update_min_a = 0.2;     ///< [rad] nav2's update_min_a
   std::size_t max_updates = 0;   ///< 0: all
@@ -194,6 +195,7 @@ struct LaserMclResult {
   std::size_t scans_in_log = 0, updates = 0;
   int map_width = 0, map_height = 0;
   double map_resolution = 0.0;
+  int map_min_echoes = 0;  ///< the built map's (LaserDataOptions::map_min_echoes)
   bool map_built = false;
   bool odometry_recorded = false;  ///< the log's odometry (else synthesised)
   std::size_t scored_updates = 0;  ///< over all runs

@@ -23,10 +23,10 @@ namespace {
 /// Every field of the options, exactly (hex floats), so two options share a key only when
 /// load_laser_dataset would return the same dataset for both.
 std::string cache_key(const LaserDataOptions& o) {
-  return fmt::format("{}|{}|{:a}|{:a}|{:a}|{:a}|{}|{}|{}|{}|{}", o.data.string(), o.map.string(),
-                     o.map_resolution, o.map_max_range, o.update_min_d, o.update_min_a,
-                     o.max_updates, o.bag.scan_topic, o.bag.odom_topic, o.bag.base_frame,
-                     o.bag.laser_frame);
+  return fmt::format("{}|{}|{:a}|{:a}|{}|{:a}|{:a}|{}|{}|{}|{}|{}", o.data.string(), o.map.string(),
+                     o.map_resolution, o.map_max_range, o.map_min_echoes, o.update_min_d,
+                     o.update_min_a, o.max_updates, o.bag.scan_topic, o.bag.odom_topic,
+                     o.bag.base_frame, o.bag.laser_frame);
 }
 
 /// Written under a temporary name and renamed (OutputFile): a killed run leaves the previous file

@@ -75,9 +75,9 @@ def run(data, proposal="implicit", particles=100, runs=10, seed=1, alphas=None,
         z_hit=0.5, z_rand=0.5, sigma_hit=0.2, max_dist=2.0, max_beams=60, laser_max_range=None,
         interpolation="bicubic", aggregation="product", laser_model="likelihood-field",
         z_short=0.05, z_max=0.05, lambda_short=0.1, update_min_d=0.25, update_min_a=0.2,
-        map_resolution=0.05, global_updates=10, global_radius=0.5, kld=False, kld_err=0.01,
-        kld_z=0.99, recovery="none", recovery_alpha_slow=0.001, recovery_alpha_fast=0.1,
-        kidnap_probability=1e-3, tracks=False, threads=0, progress=None):
+        map_resolution=0.05, map_min_echoes=2, global_updates=10, global_radius=0.5, kld=False,
+        kld_err=0.01, kld_z=0.99, recovery="none", recovery_alpha_slow=0.001,
+        recovery_alpha_fast=0.1, kidnap_probability=1e-3, tracks=False, threads=0, progress=None):
     """Laser MCL on a CARMEN log by the semi-synthetic protocol: `implicit mcl --sensor laser`.
 
     The map is built from the log's reference poses and scans (or read from `map`, a map_server
@@ -98,7 +98,9 @@ def run(data, proposal="implicit", particles=100, runs=10, seed=1, alphas=None,
     log's), interpolation, aggregation; laser_model "likelihood-field" or "beam" (--laser-model:
     the beam model, spec §3.12, takes the bootstrap proposal only, z_hit, z_rand, sigma_hit,
     max_beams and laser_max_range as above, and z_short, z_max, lambda_short [1/m]);
-    update_min_d [m] and update_min_a [rad]; map_resolution [m] of the built map;
+    update_min_d [m] and update_min_a [rad]; map_resolution [m] of the built map and
+    map_min_echoes, the scans whose beams must end in a cell to make it occupied (0: log-odds
+    only; --map-min-echoes);
     global_updates and global_radius [m] score a global start; kld=True (--kld) adapts the
     particle count by KLD-sampling between min(100, M) and max(5000, M), starting at M, with
     kld_err and kld_z; recovery "uniform" injects poses drawn uniformly over the free cells when
@@ -129,6 +131,7 @@ def run(data, proposal="implicit", particles=100, runs=10, seed=1, alphas=None,
         interpolation=interpolation, aggregation=aggregation, laser_model=laser_model,
         z_short=z_short, z_max=z_max, lambda_short=lambda_short, update_min_d=update_min_d,
         update_min_a=update_min_a, map_resolution=map_resolution,
+        map_min_echoes=map_min_echoes,
         global_updates=global_updates, global_radius=global_radius, kld=kld, kld_err=kld_err,
         kld_z=kld_z, recovery=recovery, recovery_alpha_slow=recovery_alpha_slow,
         recovery_alpha_fast=recovery_alpha_fast, kidnap_probability=kidnap_probability,

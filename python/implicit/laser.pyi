@@ -29,7 +29,7 @@ def bundled_log(name: str) -> str: ...
 def scan_at(log: dict[str, Any], k: int) -> Scan: ...
 def build_map(poses: npt.ArrayLike, scans: Union[dict[str, Any], Sequence[Scan]],
               mount: npt.ArrayLike = (0.0, 0.0, 0.0), resolution: float = 0.05,
-              max_range: float = 40.0) -> OccupancyGrid: ...
+              max_range: float = 40.0, min_echoes: int = 2) -> OccupancyGrid: ...
 def simulate_scan(grid: OccupancyGrid, pose: npt.ArrayLike,
                   mount: npt.ArrayLike = (0.0, 0.0, 0.0), beams: int = 181,
                   field_of_view: float = ..., range_min: float = 0.05, range_max: float = 30.0,
@@ -102,6 +102,7 @@ def run(data: Path, proposal: str = "implicit", particles: int = 100, runs: int 
         laser_model: str = "likelihood-field", z_short: float = 0.05, z_max: float = 0.05,
         lambda_short: float = 0.1,
         update_min_d: float = 0.25, update_min_a: float = 0.2, map_resolution: float = 0.05,
+        map_min_echoes: int = 2,
         global_updates: int = 10, global_radius: float = 0.5, kld: bool = False,
         kld_err: float = 0.01, kld_z: float = 0.99, recovery: str = "none",
         recovery_alpha_slow: float = 0.001, recovery_alpha_fast: float = 0.1,

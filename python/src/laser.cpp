@@ -210,7 +210,7 @@ void bind_mapping(py::module_& m) {
   m.def(
       "build_map",
       [](const py::object& poses, const py::object& scans, const py::object& mount,
-         const py::object& resolution, const py::object& max_range) {
+         const py::object& resolution, const py::object& max_range, const py::object& min_echoes) {
         const Array p = require_shape(poses, "poses", {-1, 3});
         const std::vector<robot::LaserScan> s = scans_arg(scans, "scans");
         require(static_cast<std::size_t>(p.shape(0)) == s.size(),
@@ -222,16 +222,18 @@ void bind_mapping(py::module_& m) {
         robot::GridMappingOptions o;
         o.resolution = number_arg(resolution, "resolution", 0.0, kInf, true);
         o.max_range = number_arg(max_range, "max_range", 0.0, kInf);
+        o.min_echoes = static_cast<int>(int_arg(min_echoes, "min_echoes", 0, 255));
         const robot::LaserMount mt = mount_arg(mount, "mount");
         py::gil_scoped_release unlocked;
         return robot::build_map(robot_poses, s, mt, o);
       },
       py::arg("poses"), py::arg("scans"), py::arg("mount") = py::make_tuple(0.0, 0.0, 0.0),
-      py::arg("resolution") = 0.05, py::arg("max_range") = 40.0,
+      py::arg("resolution") = 0.05, py::arg("max_range") = 40.0, py::arg("min_echoes") = 2,
       "Occupancy grid mapping with known poses (log-odds, Probabilistic Robotics ch. 9): poses "
       "(N, 3) the robot's, one per scan; scans the dict of read_carmen or a list of scan dicts; "
       "mount the laser's pose on the robot; resolution [m]; beams longer than max_range [m] only "
-      "clear cells (0: each scan's range_max).");
+      "clear cells (0: each scan's range_max); a cell where beams of min_echoes scans ended is "
+      "occupied whatever its log-odds (0: off).");
   m.def(
       "simulate_scan",
       [](const py::object& grid, const py::object& pose, const py::object& mount,

@@ -362,6 +362,8 @@ std::string run(const py::dict& kw, const py::object& progress) {
   s.data.data = path_arg(arg("data"), "data");
   if (!arg("map").is_none()) s.data.map = path_arg(arg("map"), "map");
   s.data.map_resolution = number_arg(arg("map_resolution"), "map_resolution", 0.005, 1.0);
+  s.data.map_min_echoes =
+      static_cast<int>(int_arg(arg("map_min_echoes"), "map_min_echoes", 0, 255));
   s.data.update_min_d = number_arg(arg("update_min_d"), "update_min_d", 0.0, kInf);
   s.data.update_min_a = number_arg(arg("update_min_a"), "update_min_a", 0.0, kInf);
   s.data.max_updates =

@@ -472,16 +472,17 @@ def test_run_passes_every_setting_as_the_cli(cli, aces):
                   alphas=(0.04,) * 4, filter_alphas=(0.03,) * 4, z_hit=0.8, z_rand=0.2,
                   sigma_hit=0.15, max_dist=1.5, max_beams=30, laser_max_range=45.0,
                   interpolation="nearest", aggregation="cubed-sum", update_min_d=0.3,
-                  update_min_a=0.25, map_resolution=0.1)
+                  update_min_a=0.25, map_resolution=0.1, map_min_echoes=3)
     c = cli("mcl", "--sensor", "laser", "--data", aces, "--method", "standard", "-M", "30",
             "--runs", "1", "--seed", "4", "--max-updates", "20", "--alphas", *["0.04"] * 4,
             "--filter-alphas", *["0.03"] * 4, "--z-hit", "0.8", "--z-rand", "0.2",
             "--sigma-hit", "0.15", "--max-beams", "30", "--laser-max-dist", "1.5",
             "--laser-max-range", "45", "--interpolation", "nearest", "--aggregation",
             "cubed-sum", "--update-min-d", "0.3", "--update-min-a", "0.25",
-            "--map-resolution", "0.1")
+            "--map-resolution", "0.1", "--map-min-echoes", "3")
     same_numbers(r, c)
     assert r["proposal"] == "bootstrap" and r["map"]["resolution"] == 0.1
+    assert r["map"]["min_echoes"] == 3
     g = laser.run(aces, particles=200, runs=2, max_updates=40, start="global", global_updates=8,
                   global_radius=0.6, implicit_map="random", starts=3, start_probe=3)
     c = cli("mcl", "--sensor", "laser", "--data", aces, "-M", "200", "--runs", "2",
@@ -542,6 +543,24 @@ def test_carmen_scans_and_mapping_forms(aces):
     b = laser.build_map(log["laser_poses"][k], as_list, resolution=0.1)
     np.testing.assert_array_equal(a.cells, b.cells)
     assert (a.cells >= 65).sum() > 100  # the scans drew walls (occupied: >= 65)
+
+
+def test_echoes_of_two_scans_keep_a_cell_the_crossing_beams_clear():
+    # Two scans end a beam in cell (3, 0) of a 1 m grid; then two scans of three beams each
+    # cross it on their way to cell 6: log-odds 2 (0.85) + 6 (-0.4) = -0.7, free; with
+    # min_echoes=2 it stays occupied (spec §3.12, "The map's echoes").
+    hit = dict(ranges=[3.2], angle_min=0.0, angle_increment=0.01, range_min=0.1, range_max=8.0)
+    cross = dict(hit, ranges=[6.2, 6.2, 6.2], angle_increment=1e-6)
+    poses = [[0.5, 0.5, 0.0]] * 4
+    scans = [hit, hit, cross, cross]
+    log_odds = laser.build_map(poses, scans, resolution=1.0, min_echoes=0)
+    echoes = laser.build_map(poses, scans, resolution=1.0)
+    ox = int(round(-log_odds.origin[0]))  # the margin's cells west of x = 0
+    assert log_odds.cells[0 + 1, ox + 3] == round(100 * (1 - 1 / (1 + math.exp(-0.7))))
+    assert echoes.cells[0 + 1, ox + 3] == 100
+    # One scan's echo is not enough.
+    once = laser.build_map(poses[1:], scans[1:], resolution=1.0)
+    assert once.cells[1, ox + 3] < 50
 
 
 def test_bad_files_raise_value_errors_naming_them(tmp_path):

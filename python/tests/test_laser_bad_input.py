@@ -141,6 +141,8 @@ BAD = [
     (build(mount=(0, 0)), r"^mount: expected shape \(3,\)"),
     (build(resolution=-1), r"^resolution: expected a finite number > 0"),
     (build(max_range=math.nan), r"^max_range: expected a finite number >= 0"),
+    (build(min_echoes=-1), r"^min_echoes: expected an integer in \[0, 255\], got -1"),
+    (build(min_echoes=2.5), r"^min_echoes: expected an integer in \[0, 255\], got float"),
     # simulate_scan
     (sim("room", [1, 1, 0]), r"^grid: " + GRID_TYPE + ", got str"),
     (sim(GRID, [1, 1]), r"^pose: expected shape \(3,\)"),
@@ -295,6 +297,8 @@ BAD = [
     (run_with(update_min_d=-1), r"^update_min_d: expected a finite number >= 0"),
     (run_with(update_min_a=math.nan), r"^update_min_a: expected a finite number >= 0"),
     (run_with(map_resolution=2.0), r"^map_resolution: expected a number in \[0\.005, 1\]"),
+    (run_with(map_min_echoes=256), r"^map_min_echoes: expected an integer in \[0, 255\], got 256"),
+    (run_with(map_min_echoes=None), r"^map_min_echoes: expected an integer in \[0, 255\], got None"),
     (run_with(global_updates=0), r"^global_updates: expected an integer in"),
     (run_with(global_radius=0), r"^global_radius: expected a finite number > 0"),
     (run_with(tracks="yes"), r"^tracks: expected True or False, got str"),

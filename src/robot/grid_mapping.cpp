@@ -32,6 +32,8 @@ void GridMappingOptions::validate() const {
           max_range);
   require(std::isfinite(margin) && margin >= 0,
           "GridMappingOptions: expected margin >= 0 [m], got {}", margin);
+  require(min_echoes >= 0 && min_echoes <= 255,
+          "GridMappingOptions: expected min_echoes in [0, 255] (0: off), got {}", min_echoes);
 }
 
 LogOddsGrid::LogOddsGrid(int width, int height, double resolution, const Vec<2>& origin,
@@ -49,6 +51,7 @@ LogOddsGrid::LogOddsGrid(int width, int height, double resolution, const Vec<2>&
           "LogOddsGrid: expected at most 2^31 cells, got {} x {} = {}", width, height, cells);
   log_odds_.assign(static_cast<std::size_t>(cells), 0.0f);
   observed_.assign(static_cast<std::size_t>(cells), 0);
+  echoes_.assign(static_cast<std::size_t>(cells), 0);
 }
 
 void LogOddsGrid::update(int ix, int iy, double delta) {
@@ -77,17 +80,36 @@ void LogOddsGrid::integrate(const Pose& robot_pose, const LaserMount& mount,
                             const LaserScan& scan) {
   detail::check_scan_input(robot_pose, mount, scan, "LogOddsGrid::integrate");
   const Pose s = sensor_pose(robot_pose, mount);
+  scan_ends_.clear();
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const detail::BeamUse use = detail::beam_use(scan, i, options_.max_range);
-    if (use.used) trace(s.head<2>(), s(2) + scan.bearing(i), use.length, use.hit);
+    if (!use.used) continue;
+    const double angle = s(2) + scan.bearing(i);
+    trace(s.head<2>(), angle, use.length, use.hit);
+    if (!use.hit) continue;
+    const Vec<2> e =
+        (s.head<2>() + use.length * Vec<2>(std::cos(angle), std::sin(angle)) - origin_) /
+        resolution_;
+    const double fx = std::floor(e.x()), fy = std::floor(e.y());
+    if (fx >= 0 && fy >= 0 && fx < width_ && fy < height_)
+      scan_ends_.push_back(index(static_cast<int>(fx), static_cast<int>(fy)));
   }
+  // An echo counts once per scan: neighbouring beams of one scan often end in one cell, and a
+  // single scan of a passer-by must not make a wall.
+  std::sort(scan_ends_.begin(), scan_ends_.end());
+  scan_ends_.erase(std::unique(scan_ends_.begin(), scan_ends_.end()), scan_ends_.end());
+  for (std::size_t k : scan_ends_)
+    if (echoes_[k] < 255) ++echoes_[k];
 }
 
 OccupancyGrid LogOddsGrid::to_occupancy() const {
   OccupancyGrid out(width_, height_, resolution_, origin_, OccupancyGrid::kUnknown);
   for (int iy = 0; iy < height_; ++iy)
     for (int ix = 0; ix < width_; ++ix) {
-      if (observed(ix, iy)) out.at(ix, iy) = detail::occupancy_value(log_odds(ix, iy));
+      if (!observed(ix, iy)) continue;
+      const bool echoed = options_.min_echoes > 0 && echoes(ix, iy) >= options_.min_echoes;
+      out.at(ix, iy) =
+          echoed ? OccupancyGrid::kOccupied : detail::occupancy_value(log_odds(ix, iy));
     }
   return out;
 }

@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "implicit/core/error.hpp"
@@ -97,7 +99,10 @@ TEST(GridMapping, NoReturnBeamsClearUpToTheirRangeAndShortReadingsAreIgnored) {
 
 TEST(GridMapping, BeamsOutsideTheExtentAndTheClamp) {
   // The sensor 3 m west of the grid: the beam enters at x = 0 and ends in cell 2 (x = 2.5).
-  LogOddsGrid g(5, 1, 1.0, Vec<2>::Zero());
+  // Echoes off: the map shows the log-odds.
+  GridMappingOptions log_odds_only;
+  log_odds_only.min_echoes = 0;
+  LogOddsGrid g(5, 1, 1.0, Vec<2>::Zero(), log_odds_only);
   g.integrate(Pose(-3.0, 0.5, 0.0), LaserMount{}, one_beam(0.0, 5.5));
   EXPECT_EQ(g.log_odds(0, 0), -0.4f);
   EXPECT_EQ(g.log_odds(1, 0), -0.4f);
@@ -108,10 +113,42 @@ TEST(GridMapping, BeamsOutsideTheExtentAndTheClamp) {
   EXPECT_EQ(g.log_odds(2, 0), 5.0f);
   EXPECT_EQ(g.log_odds(0, 0), -5.0f);
   EXPECT_EQ(g.to_occupancy().at(2, 0), percent(5.0));  // 99
+  EXPECT_EQ(g.echoes(2, 0), 20);
   // A beam that passes beside the grid changes nothing.
   LogOddsGrid h(5, 1, 1.0, Vec<2>::Zero());
   h.integrate(Pose(-3.0, 5.0, 0.0), LaserMount{}, one_beam(0.0, INFINITY));
   for (int ix = 0; ix < 5; ++ix) EXPECT_FALSE(h.observed(ix, 0));
+}
+
+// A wall cell seen edge-on: scan A's beam ends in cell 3 (a hit), scan B's beams cross it on
+// their way further. Log-odds alone let the crossings erase it; echoes from two scans keep it.
+TEST(GridMapping, EchoesFromTwoScansKeepACellTheBeamsCrossingItWouldClear) {
+  const Pose at(0.5, 0.5, 0.0);
+  LaserScan b = one_beam(0.0, 6.2);  // ends in cell 6, crossing cells 0..5
+  b.ranges = {6.2, 6.2, 6.2};        // three beams a micro-radian apart: three crossings of cell 3
+  b.angle_increment = 1e-6;
+  const auto map_after = [&](int min_echoes, int hits, int crossings) {
+    GridMappingOptions opt;
+    opt.min_echoes = min_echoes;
+    LogOddsGrid g(8, 1, 1.0, Vec<2>::Zero(), opt);
+    for (int k = 0; k < hits; ++k) g.integrate(at, LaserMount{}, one_beam(0.0, 3.2));
+    for (int k = 0; k < crossings; ++k) g.integrate(at, LaserMount{}, b);
+    return std::pair(g.to_occupancy().at(3, 0), g.echoes(3, 0));
+  };
+  // Two hits (+1.7), then two scans crossing it three times each (-2.4): log-odds -0.7.
+  EXPECT_EQ(map_after(0, 2, 2), std::pair(static_cast<std::int8_t>(percent(1.7 - 2.4)), 2));
+  EXPECT_EQ(map_after(2, 2, 2), std::pair(OccupancyGrid::kOccupied, 2));
+  // One scan's echo is not enough, however often it is crossed.
+  EXPECT_EQ(map_after(2, 1, 2).first, percent(0.85 - 2.4));
+  // An echo counts once per scan: three beams of one scan ending in one cell are one echo.
+  LogOddsGrid g(8, 1, 1.0, Vec<2>::Zero());
+  g.integrate(at, LaserMount{}, b);
+  EXPECT_EQ(g.echoes(6, 0), 1);
+  EXPECT_FLOAT_EQ(g.log_odds(6, 0), 3 * 0.85f);
+  EXPECT_EQ(g.echoes(3, 0), 0);
+  // No return is no echo.
+  g.integrate(at, LaserMount{}, one_beam(0.0, INFINITY));
+  EXPECT_EQ(g.echoes(7, 0), 0);
 }
 
 std::string mapping_error(const std::function<void()>& f) {
@@ -136,6 +173,10 @@ TEST(GridMapping, RefusesBadOptionsPosesAndScans) {
   EXPECT_THAT(with([](auto& o) { o.clamp = std::nan(""); }), HasSubstr("expected clamp > 0"));
   EXPECT_THAT(with([](auto& o) { o.max_range = -1; }), HasSubstr("expected max_range >= 0"));
   EXPECT_THAT(with([](auto& o) { o.margin = INFINITY; }), HasSubstr("expected margin >= 0"));
+  EXPECT_THAT(with([](auto& o) { o.min_echoes = -1; }),
+              HasSubstr("expected min_echoes in [0, 255] (0: off), got -1"));
+  EXPECT_THAT(with([](auto& o) { o.min_echoes = 256; }),
+              HasSubstr("expected min_echoes in [0, 255] (0: off), got 256"));
   EXPECT_EQ(with([](auto&) {}), "no error");
 
   LogOddsGrid g(5, 5, 1.0, Vec<2>::Zero());

@@ -116,6 +116,7 @@ TEST(TiledGrid, EqualsTheDenseGridCellByCellOnRandomScans) {
   for (double max_range : {0.0, 3.0}) {
     GridMappingOptions opt;
     opt.max_range = max_range;
+    opt.min_echoes = 0;  // the tiled grid keeps log-odds only (GridMappingOptions::min_echoes)
     // The dense grid's origin at (0, 0) as the tiled grid's: the same arithmetic, so equal bits.
     robot::LogOddsGrid dense(400, 400, 0.05, Vec<2>::Zero(), opt);
     Grid tiled(opt);

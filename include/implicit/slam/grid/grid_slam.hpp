@@ -44,9 +44,12 @@ struct GridSlamOptions {
   std::size_t particles = 30;
   std::uint64_t seed = 1;
   double resample_threshold = 0.5;  ///< resample when N_eff < this * particles; in [0, 1]
+  /// The particles' maps and the reference map of the map score: both log-odds only (the tiled
+  /// grids count no echoes, so the reference the score compares them with counts none either).
   robot::GridMappingOptions map = [] {
     robot::GridMappingOptions m;
     m.max_range = 40.0;
+    m.min_echoes = 0;
     return m;
   }();
   ScanMatchParams scan;
