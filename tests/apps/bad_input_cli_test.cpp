@@ -1,6 +1,6 @@
 // The command line on bad input: flag values (usage error, exit 2, the flag named), data that
 // cannot be run or scores nothing (exit 1 naming the file and line, or the empty metric), outputs
-// that cannot be written (exit 1); and what every subcommand shows and prints.
+// that cannot be written (exit 1). What every subcommand shows: every_subcommand_bad_input_test.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -96,27 +96,6 @@ TEST(Cli, FractionalValueOfAnIntegerFlagSaysInteger) {
   const auto range = run_cli("slam --particles 0");
   EXPECT_EQ(range.code, 2);
   EXPECT_NE(range.err.find("expected [1, 1000000], got 0"), std::string::npos) << range.err;
-}
-
-TEST(Cli, SubcommandHelpShowsItsOwnExamples) {
-  for (const char* name : {"slit", "arm", "himmelblau", "mcl", "slam", "reproduce"}) {
-    const auto r = run_cli(std::string(name) + " --help");
-    EXPECT_EQ(r.code, 0) << name;
-    EXPECT_NE(r.out.find(std::string("implicit ") + name + " "), std::string::npos)
-        << name << " shows no example of itself:\n"
-        << r.out;
-    EXPECT_EQ(r.out.find("implicit <subcommand> --help"), std::string::npos)
-        << name << " shows the top-level examples:\n"
-        << r.out;
-  }
-}
-
-TEST(Cli, JsonCarriesVersionAndCommit) {
-  const auto r = run_cli("arm --estimator closed-form --json --quiet");
-  ASSERT_EQ(r.code, 0) << r.err;
-  const auto j = nlohmann::json::parse(r.out);
-  EXPECT_TRUE(j.contains("version") && j["version"].is_string()) << r.out;
-  EXPECT_TRUE(j.contains("commit") && j["commit"].is_string()) << r.out;
 }
 
 TEST(Cli, SlamLogWithNoControlsExits1NamingTheLine) {

@@ -3,7 +3,8 @@
 // subcommands are read from `implicit --help`, so a new subcommand without rows here fails the
 // test. Only refusals that happen before any work are listed: the table runs in seconds, also
 // under the sanitizers. Deeper checks per subcommand live in bad_input_cli_test.cpp and the
-// subcommand's own tests.
+// subcommand's own tests. Also what every subcommand shows: its own examples, and the version
+// and commit in its JSON.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -12,6 +13,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "apps/cli_runner.hpp"
 
@@ -238,6 +241,27 @@ TEST(EverySubcommand, RefusesBadInputNamingIt) {
   }
   // A refused command writes nothing.
   EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+TEST(Cli, SubcommandHelpShowsItsOwnExamples) {
+  for (const char* name : {"slit", "arm", "himmelblau", "mcl", "slam", "reproduce"}) {
+    const auto r = run_cli(std::string(name) + " --help");
+    EXPECT_EQ(r.code, 0) << name;
+    EXPECT_NE(r.out.find(std::string("implicit ") + name + " "), std::string::npos)
+        << name << " shows no example of itself:\n"
+        << r.out;
+    EXPECT_EQ(r.out.find("implicit <subcommand> --help"), std::string::npos)
+        << name << " shows the top-level examples:\n"
+        << r.out;
+  }
+}
+
+TEST(Cli, JsonCarriesVersionAndCommit) {
+  const auto r = run_cli("arm --estimator closed-form --json --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j.contains("version") && j["version"].is_string()) << r.out;
+  EXPECT_TRUE(j.contains("commit") && j["commit"].is_string()) << r.out;
 }
 
 }  // namespace
