@@ -98,8 +98,10 @@ void LogOddsGrid::integrate(const Pose& robot_pose, const LaserMount& mount,
   // single scan of a passer-by must not make a wall.
   std::sort(scan_ends_.begin(), scan_ends_.end());
   scan_ends_.erase(std::unique(scan_ends_.begin(), scan_ends_.end()), scan_ends_.end());
-  for (std::size_t k : scan_ends_)
+  for (std::size_t k : scan_ends_) {
     if (echoes_[k] < 255) ++echoes_[k];
+    observed_[k] = 1;  // the trace's end cell; set here too in case rounding put them apart
+  }
 }
 
 OccupancyGrid LogOddsGrid::to_occupancy() const {
