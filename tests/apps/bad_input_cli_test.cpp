@@ -1,6 +1,7 @@
 // The command line on bad input: flag values (usage error, exit 2, the flag named), data that
 // cannot be run or scores nothing (exit 1 naming the file and line, or the empty metric), outputs
-// that cannot be written (exit 1). What every subcommand shows: every_subcommand_bad_input_test.cpp.
+// that cannot be written (exit 1). What every subcommand shows:
+// every_subcommand_bad_input_test.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
