@@ -318,7 +318,6 @@ LaserMclResult run_laser_mcl(const LaserMclSettings& settings, const LaserDatase
   result.map_width = d.map.width();
   result.map_height = d.map.height();
   result.map_resolution = d.map.resolution();
-  result.map_min_echoes = settings.data.map_min_echoes;
   result.map_built = d.map_built;
   result.odometry_recorded = d.odometry_recorded();
   const std::size_t n = d.scans.size();
@@ -384,7 +383,7 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
               {"height", r.map_height},
               {"resolution", r.map_resolution},
               {"built_from_reference", r.map_built},
-              {"min_echoes", r.map_built ? nlohmann::json(r.map_min_echoes) : nlohmann::json()}};
+              {"min_echoes", r.map_built ? nlohmann::json(s.data.map_min_echoes) : nlohmann::json()}};
   const auto alphas = [](const robot::OdometryAlphas& a) {
     return nlohmann::json{
         {"alpha1", a.alpha1}, {"alpha2", a.alpha2}, {"alpha3", a.alpha3}, {"alpha4", a.alpha4}};

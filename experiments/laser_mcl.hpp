@@ -195,7 +195,6 @@ struct LaserMclResult {
   std::size_t scans_in_log = 0, updates = 0;
   int map_width = 0, map_height = 0;
   double map_resolution = 0.0;
-  int map_min_echoes = 0;  ///< the built map's (LaserDataOptions::map_min_echoes)
   bool map_built = false;
   bool odometry_recorded = false;  ///< the log's odometry (else synthesised)
   std::size_t scored_updates = 0;  ///< over all runs

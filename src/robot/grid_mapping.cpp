@@ -60,12 +60,11 @@ void LogOddsGrid::update(int ix, int iy, double delta) {
   observed_[k] = 1;
 }
 
-// Walks the beam from `from` (world) along `angle` for `length` metres: misses in every cell
-// it crosses, and in the cell of its end point a hit (or a miss when `hit` is false).
-void LogOddsGrid::trace(const Vec<2>& from, double angle, double length, bool hit) {
+// Walks the beam from `from` (world) along the unit vector `d` for `length` metres: misses in
+// every cell it crosses, and in the cell of its end point a hit (or a miss when `hit` is false).
+void LogOddsGrid::trace(const Vec<2>& from, const Vec<2>& d, double length, bool hit) {
   const double inv_res = 1.0 / resolution_;
   const Vec<2> g = (from - origin_) * inv_res;
-  const Vec<2> d(std::cos(angle), std::sin(angle));
   const double end = length * inv_res;
   double t = 0.0;
   if (!detail::enter_box(g, d, width_, height_, kMappingUnbounded, &t) || t > end) return;
@@ -85,11 +84,10 @@ void LogOddsGrid::integrate(const Pose& robot_pose, const LaserMount& mount,
     const detail::BeamUse use = detail::beam_use(scan, i, options_.max_range);
     if (!use.used) continue;
     const double angle = s(2) + scan.bearing(i);
-    trace(s.head<2>(), angle, use.length, use.hit);
+    const Vec<2> d(std::cos(angle), std::sin(angle));
+    trace(s.head<2>(), d, use.length, use.hit);
     if (!use.hit) continue;
-    const Vec<2> e =
-        (s.head<2>() + use.length * Vec<2>(std::cos(angle), std::sin(angle)) - origin_) /
-        resolution_;
+    const Vec<2> e = (s.head<2>() + use.length * d - origin_) / resolution_;
     const double fx = std::floor(e.x()), fy = std::floor(e.y());
     if (fx >= 0 && fy >= 0 && fx < width_ && fy < height_)
       scan_ends_.push_back(index(static_cast<int>(fx), static_cast<int>(fy)));

@@ -90,7 +90,7 @@ class LogOddsGrid {
            static_cast<std::size_t>(ix);
   }
   void update(int ix, int iy, double delta);
-  void trace(const Vec<2>& from, double angle, double length, bool hit);
+  void trace(const Vec<2>& from, const Vec<2>& direction, double length, bool hit);
 
   int width_ = 0, height_ = 0;
   double resolution_ = 0.0;
