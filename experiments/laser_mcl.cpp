@@ -379,11 +379,12 @@ nlohmann::json to_json(const LaserMclResult& r, bool include_tracks) {
   j["seed"] = s.seed;
   j["scans_in_log"] = r.scans_in_log;
   j["updates"] = r.updates;
-  j["map"] = {{"width", r.map_width},
-              {"height", r.map_height},
-              {"resolution", r.map_resolution},
-              {"built_from_reference", r.map_built},
-              {"min_echoes", r.map_built ? nlohmann::json(s.data.map_min_echoes) : nlohmann::json()}};
+  j["map"] = {
+      {"width", r.map_width},
+      {"height", r.map_height},
+      {"resolution", r.map_resolution},
+      {"built_from_reference", r.map_built},
+      {"min_echoes", r.map_built ? nlohmann::json(s.data.map_min_echoes) : nlohmann::json()}};
   const auto alphas = [](const robot::OdometryAlphas& a) {
     return nlohmann::json{
         {"alpha1", a.alpha1}, {"alpha2", a.alpha2}, {"alpha3", a.alpha3}, {"alpha4", a.alpha4}};
