@@ -53,6 +53,10 @@ void add_grid_slam_options(CLI::App& sub, GridSlamCommand& g) {
           ->check(in_range(0.0, 10.0)),
       sub.add_option("--max-scans", g.max_scans, "laser: use the first N scans of the log (0: all)")
           ->check(in_range(0, 100000000)),
+      sub.add_option("--map-min-echoes", g.map_min_echoes,
+                     "laser: a cell where beams of N scans ended is occupied in the particles' "
+                     "maps, whatever its log-odds (0: log-odds alone; default 1)")
+          ->check(in_range(0, 255)),
       sub.add_option("--map-out", g.map_out,
                      "laser: write the first run's map (its best particle's) as map_server files "
                      "(FILE.yaml and its .pgm)")
@@ -175,6 +179,7 @@ void run_grid_slam_command(const SlamSettings& shared, const GridSlamCommand& g,
   settings.keep_first = true;  // its trajectory and map for the files below
   if (!g.alphas.empty()) o.filter.alphas = {g.alphas[0], g.alphas[1], g.alphas[2], g.alphas[3]};
   o.max_scans = static_cast<std::size_t>(g.max_scans);
+  if (g.map_min_echoes >= 0) o.filter.map.min_echoes = g.map_min_echoes;
   settings.validate();
   require_bag_for_flags(g.bag, shared.data_dir, "slam --sensor laser");
   if (bag) o.odometry = slam::GridOdometrySource::kRecorded;

@@ -22,6 +22,7 @@ struct GridSlamCommand {
   std::string sensor = "landmark";  ///< landmark | laser
   std::vector<double> alphas;       ///< the odometry noise (empty: the runner's)
   int max_scans = 0;                ///< 0: every scan
+  int map_min_echoes = -1;          ///< -1: GridSlamOptions' default
   std::string map_out;              ///< the first run's map as map_server YAML + PGM
   std::string g2o;                  ///< the first run's pose graph as a g2o file
   BagFlags bag;                     ///< topics and frames when --data is a ROS bag

@@ -103,6 +103,7 @@ void add_grid_slam(Plan& plan, bool quick) {
       {"linear_update_m", d.filter.gate.linear_update},
       {"angular_update_rad", d.filter.gate.angular_update},
       {"implicit_starts", d.implicit.starts},
+      {"map_min_echoes", d.filter.map.min_echoes},
       {"figure_data", quick ? "first run of each proposal on the first 40 scans of ACES"
                             : "first run of each proposal on Intel, M = 8"}};
 }

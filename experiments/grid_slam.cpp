@@ -174,6 +174,7 @@ nlohmann::json to_json(const GridSlamResult& r) {
   j["alphas"] = {o.filter.alphas.alpha1, o.filter.alphas.alpha2, o.filter.alphas.alpha3,
                  o.filter.alphas.alpha4};
   j["seed"] = r.settings.seed;
+  j["map_min_echoes"] = o.filter.map.min_echoes;
   j["odometry"] = o.odometry == slam::GridOdometrySource::kRecorded ? "recorded" : "synthesised";
   j["scans_processed"] = r.scans_processed;
   // Without a reference (recorded odometry) the relation errors were not computed: null.

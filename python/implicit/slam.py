@@ -66,7 +66,7 @@ def run(method="implicit", particles=100, datasets=50, seed=1, data=None, associ
 
 
 def grid(data, method="implicit", particles=30, seed=1, alphas=(0.002,) * 4, max_scans=0,
-         threads=0, progress=None):
+         threads=0, progress=None, map_min_echoes=1):
     """Grid SLAM on a CARMEN laser log: one run of `implicit slam --sensor laser` (spec §3.13).
 
     Every particle carries its own occupancy grid; the proposal is "bootstrap" (the odometry
@@ -83,7 +83,9 @@ def grid(data, method="implicit", particles=30, seed=1, alphas=(0.002,) * 4, max
     particles (-M, in [1, 10^6]), seed (--seed: the odometry's noise and the filter's draws),
     alphas alpha1..alpha4 of the odometry noise and of the filter's motion model (--alphas, each
     in [0, 10]), max_scans the first N scans of the log (--max-scans; 0: all; of these the
-    filter processes those where the corrected pose moved past the map-update gate), threads
+    filter processes those where the corrected pose moved past the map-update gate),
+    map_min_echoes (--map-min-echoes, in [0, 255]: a cell where beams of that many scans ended is
+    occupied in the particles' maps whatever its log-odds; 0 log-odds alone), threads
     (--threads; 0: all cores; the results do not depend on it). The tool's --datasets N runs
     seeds seed, seed + 1, ...: grid(seed=s + r) is its run r. progress, if given, is called as
     progress(done, total) after each scan the filter steps on: done = 2 .. total, total the
@@ -110,7 +112,7 @@ def grid(data, method="implicit", particles=30, seed=1, alphas=(0.002,) * 4, max
         (None for a fraction with nothing to count), the same of the dead-reckoning map as
         odometry_map_agreement, ..., odometry_map_f1, map_tolerance_m, reference_map_cpu_s and
         map_score_cpu_s; scans_processed (= n) and the settings (data, method, particles, seed,
-        alphas).
+        alphas, map_min_echoes).
         The numbers are those of `implicit slam --sensor laser --json` for the same settings
         and seed.
 
@@ -125,5 +127,5 @@ def grid(data, method="implicit", particles=30, seed=1, alphas=(0.002,) * 4, max
         r["map"].shape, r["relation_translation_m"], r["odometry_relation_translation_m"]
     """
     settings = dict(data=data, method=method, particles=particles, seed=seed, alphas=alphas,
-                    max_scans=max_scans, threads=threads)
+                    max_scans=max_scans, threads=threads, map_min_echoes=map_min_echoes)
     return _implicit.slam._grid(settings, progress)

@@ -111,6 +111,7 @@ py::dict result_dict(const slam::GridSlamRun& run, const slam::GridSlamRunOption
   d["method"] = method;
   d["particles"] = o.filter.particles;
   d["seed"] = o.filter.seed;
+  d["map_min_echoes"] = o.filter.map.min_echoes;
   const robot::OdometryAlphas& a = o.filter.alphas;
   d["alphas"] = py::make_tuple(a.alpha1, a.alpha2, a.alpha3, a.alpha4);
   d["scans_processed"] = run.processed;
@@ -159,6 +160,8 @@ py::dict grid(const py::dict& kw, const py::object& progress) {
   o.filter.alphas = grid_alphas(setting(kw, "alphas"));
   o.max_scans =
       static_cast<std::size_t>(int_arg(setting(kw, "max_scans"), "max_scans", 0, kMaxScans));
+  o.filter.map.min_echoes =
+      static_cast<int>(int_arg(setting(kw, "map_min_echoes"), "map_min_echoes", 0, 255));
   const int threads = static_cast<int>(int_arg(setting(kw, "threads"), "threads", 0, kMaxThreads));
   require(progress.is_none() || PyCallable_Check(progress.ptr()),
           "progress: expected a callable progress(done, total) or None, got {}",

@@ -152,6 +152,17 @@ def test_other_proposals_and_alphas_equal_the_cli(cli, aces, method):
     assert r["alphas"] == alphas and r["method"] == method
 
 
+@pytest.mark.parametrize("echoes", [0, 3])
+def test_map_min_echoes_equals_the_cli(cli, aces, echoes):
+    r = slam.grid(aces, particles=4, seed=4, max_scans=60, map_min_echoes=echoes, threads=1)
+    c = cli_grid(cli, aces, "-M", "4", "--seed", "4", "--max-scans", "60", "--map-min-echoes",
+                 str(echoes))
+    assert_same_numbers(r, c)
+    assert r["map_min_echoes"] == echoes == c["map_min_echoes"]
+    # The default (1) is another map, so other numbers: the setting reached the filter.
+    assert slam.grid(aces, particles=4, seed=4, max_scans=60)["map_f1"] != r["map_f1"]
+
+
 def test_the_tools_datasets_are_seeds(cli, aces):
     c = cli_grid(cli, aces, "-M", "4", "--max-scans", "50", "--seed", "7", "--datasets", "2")
     for run in range(2):

@@ -88,6 +88,11 @@ BAD = [
     (grid_with(max_scans=100_000_001), r"^max_scans: expected an integer in \[0, 100000000\]"),
     (grid_with(max_scans=3.0), r"^max_scans: expected an integer .* got float"),
     (grid_with(max_scans=None), r"^max_scans: expected an integer .* got NoneType"),
+    # map_min_echoes: --map-min-echoes in_range(0, 255)
+    (grid_with(map_min_echoes=-1), r"^map_min_echoes: expected an integer in \[0, 255\], got -1"),
+    (grid_with(map_min_echoes=256), r"^map_min_echoes: expected an integer in \[0, 255\], got 256"),
+    (grid_with(map_min_echoes=1.0), r"^map_min_echoes: expected an integer .* got float"),
+    (grid_with(map_min_echoes=None), r"^map_min_echoes: expected an integer .* got NoneType"),
     # threads: --threads in_range(0, 1024)
     (grid_with(threads=-1), r"^threads: expected an integer in \[0, 1024\], got -1"),
     (grid_with(threads=1025), r"^threads: expected an integer in \[0, 1024\], got 1025"),

@@ -184,6 +184,7 @@ const std::map<std::string, std::vector<SubcommandBadInput>>& every_subcommand_r
         {"slam --alphas 0.1 0.1 0.1 0.1", 2, {"--alphas"}},
         {"slam --sensor laser --alphas 0.1 -1 0.1 0.1", 2, {"--alphas"}},
         {"slam --sensor laser --max-scans x", 2, {"--max-scans"}},
+        {"slam --sensor laser --map-min-echoes 300", 2, {"--map-min-echoes"}},
         {"slam --sensor laser --map-out ''", 2, {"--map-out"}},
         {"slam --sensor laser --g2o ''", 2, {"--g2o"}},
         {"slam --sensor laser --g2o DIR/gone/g.g2o", 2, {"--g2o", "gone"}},

@@ -158,6 +158,10 @@ TEST(GridSlamCli, FlagsOfTheOtherSensorAndMissingDataAreRefused) {
       {"slam --sensor laser --alphas 0.1 0.1 --data " + aces, 2, "--alphas"},
       {"slam --sensor laser --alphas 0.1 nan 0.1 0.1 --data " + aces, 2, "--alphas"},
       {"slam --sensor laser --max-scans -1 --data " + aces, 2, "--max-scans"},
+      {"slam --map-min-echoes 2", 2, "--map-min-echoes"},
+      {"slam --sensor laser --map-min-echoes -1 --data " + aces, 2, "--map-min-echoes"},
+      {"slam --sensor laser --map-min-echoes 256 --data " + aces, 2, "--map-min-echoes"},
+      {"slam --sensor laser --map-min-echoes x --data " + aces, 2, "--map-min-echoes"},
       {"slam --sensor laser --map-out '' --data " + aces, 2, "--map-out"},
       {"slam --sensor laser --data /nonexistent/gone.log.gz", 1, "gone.log.gz"},
   };

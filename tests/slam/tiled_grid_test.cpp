@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "implicit/core/error.hpp"
@@ -113,10 +114,10 @@ LaserScan tiled_grid_random_scan(Rng& rng) {
 }
 
 TEST(TiledGrid, EqualsTheDenseGridCellByCellOnRandomScans) {
-  for (double max_range : {0.0, 3.0}) {
+  for (const auto& [max_range, min_echoes] : {std::pair{0.0, 0}, {3.0, 0}, {0.0, 1}, {3.0, 2}}) {
     GridMappingOptions opt;
     opt.max_range = max_range;
-    opt.min_echoes = 0;  // the tiled grid keeps log-odds only (GridMappingOptions::min_echoes)
+    opt.min_echoes = min_echoes;
     // The dense grid's origin at (0, 0) as the tiled grid's: the same arithmetic, so equal bits.
     robot::LogOddsGrid dense(400, 400, 0.05, Vec<2>::Zero(), opt);
     Grid tiled(opt);
@@ -130,15 +131,18 @@ TEST(TiledGrid, EqualsTheDenseGridCellByCellOnRandomScans) {
       dense.integrate(x, mount, scan);
       tiled.integrate(x, mount, scan);
     }
-    int differ = 0, observed = 0;
+    int differ = 0, observed = 0, echoed = 0;
     for (int iy = 0; iy < 400; ++iy)
       for (int ix = 0; ix < 400; ++ix) {
         differ += dense.log_odds(ix, iy) != tiled.log_odds(ix, iy) ||
-                  dense.observed(ix, iy) != tiled.observed(ix, iy);
+                  dense.observed(ix, iy) != tiled.observed(ix, iy) ||
+                  dense.echoes(ix, iy) != tiled.echoes(ix, iy);
+        echoed += tiled.echoes(ix, iy) >= 2;
         observed += dense.observed(ix, iy);
       }
-    EXPECT_EQ(differ, 0) << "max_range " << max_range;
+    EXPECT_EQ(differ, 0) << "max_range " << max_range << ", min_echoes " << min_echoes;
     EXPECT_GT(observed, 10000);
+    EXPECT_GT(echoed, 10);  // the comparison includes cells with echoes of several scans
     EXPECT_FALSE(tiled.observed(-1, 200));  // nothing outside the dense grid's extent
     // The dense export over the observed box is the dense grid's, shifted.
     const robot::OccupancyGrid a = dense.to_occupancy(), b = tiled.to_occupancy_grid();
@@ -150,8 +154,54 @@ TEST(TiledGrid, EqualsTheDenseGridCellByCellOnRandomScans) {
         const auto v = b.contains(bx, by) ? b.at(bx, by) : robot::OccupancyGrid::kUnknown;
         cells_differ += a.at(ix, iy) != v;
       }
-    EXPECT_EQ(cells_differ, 0);
+    EXPECT_EQ(cells_differ, 0) << "min_echoes " << min_echoes;
   }
+}
+
+// Echoes (GridMappingOptions::min_echoes): a scan counts once per cell however many of its beams
+// end there, and a cell with enough echoes is fully occupied evidence for the scan match and 100
+// in the map, whatever its log-odds.
+TEST(TiledGrid, EchoesCountScansAndMakeACellOccupied) {
+  GridMappingOptions opt;
+  opt.resolution = 1.0;
+  opt.min_echoes = 1;
+  Grid grid(opt);
+  LaserScan twice = tiled_grid_hand_scan();  // two beams west, both ending in cell (-2, 0)
+  twice.angle_increment = -0.01;
+  twice.ranges = {3.0, 3.2};
+  grid.integrate(Pose(1.5, 0.5, 0.0), {}, twice);
+  EXPECT_EQ(grid.echoes(-2, 0), 1);  // two beams of one scan: one echo
+  EXPECT_FLOAT_EQ(grid.log_odds(-2, 0), 2 * 0.85f);
+  EXPECT_EQ(grid.echoes(-1, 0), 0);
+  EXPECT_EQ(grid.occupancy_evidence(-2, 0), 1.0);
+  EXPECT_EQ(grid.occupancy_evidence(-1, 0), 0.0);   // crossed: log-odds below 0
+  EXPECT_EQ(grid.occupancy_evidence(50, 50), 0.0);  // never observed, no tile
+
+  // Clear the echo's cell with beams that cross it (from the east, ending at x = -3.5):
+  // log-odds 1.7 - 5 x 0.4 = -0.3, free by log-odds alone.
+  LaserScan through = tiled_grid_hand_scan();
+  through.ranges = {5.0, kTiledGridInf, kTiledGridInf, 0.05};
+  through.range_max = 6.0;
+  for (int k = 0; k < 5; ++k) grid.integrate(Pose(1.5, 0.5, 0.0), {}, through);
+  EXPECT_NEAR(grid.log_odds(-2, 0), 1.7 - 2.0, 1e-6);
+  EXPECT_EQ(grid.echoes(-2, 0), 1);
+  EXPECT_EQ(grid.echoes(-4, 0), 5);
+  EXPECT_EQ(grid.occupancy_evidence(-2, 0), 1.0);  // the echo keeps it
+  const robot::OccupancyGrid map = grid.to_occupancy_grid();
+  const Eigen::Vector2i c = map.cell_of(Vec<2>(-1.5, 0.5));
+  EXPECT_EQ(map.at(c.x(), c.y()), 100);
+
+  opt.min_echoes = 2;  // the same scans, two echoes needed: log-odds decide (-2, 0)
+  Grid two(opt);
+  two.integrate(Pose(1.5, 0.5, 0.0), {}, twice);
+  for (int k = 0; k < 5; ++k) two.integrate(Pose(1.5, 0.5, 0.0), {}, through);
+  EXPECT_EQ(two.occupancy_evidence(-2, 0), 0.0);
+  EXPECT_EQ(two.occupancy_evidence(-4, 0), 1.0);  // five echoes
+  opt.min_echoes = 0;                             // log-odds alone: the end cell's tanh(l / 2)
+  Grid none(opt);
+  none.integrate(Pose(1.5, 0.5, 0.0), {}, twice);
+  EXPECT_DOUBLE_EQ(none.occupancy_evidence(-2, 0), std::tanh(0.5 * double(2 * 0.85f)));
+  EXPECT_EQ(none.echoes(-2, 0), 1);  // counted, not used
 }
 
 TEST(TiledGrid, ACopySharesTheTilesItDoesNotWrite) {

@@ -43,7 +43,7 @@ struct GridMappingOptions {
   double clamp = 5.0;           ///< log-odds are kept in [-clamp, clamp]
   /// A cell where beams of at least this many scans ended is occupied (100) in to_occupancy,
   /// whatever its log-odds; 0 leaves the log-odds alone. In [0, 255]. The tiled grid of grid
-  /// SLAM does not count echoes (its maps are read through their log-odds).
+  /// SLAM counts them the same way (GridSlamOptions sets 1).
   int min_echoes = 2;
   /// [m] beams are used up to this range; 0 means each scan's range_max. A reading at or
   /// beyond it clears the cells up to it (up to range_max at most) and marks no hit.

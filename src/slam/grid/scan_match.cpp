@@ -132,8 +132,7 @@ double GridScanModel::smoothed_occupancy(const Vec<2>& p, Vec<2>* gradient,
       const auto ii = static_cast<std::size_t>(i);
       // Occupancy evidence 2P - 1 = tanh(l / 2) where positive, else 0 (free and unknown
       // alike): a wall seen once (P = 0.7) must stand out from the unknown space behind it.
-      const float l = map_->log_odds(tx.first + i, ty.first + j);
-      const double prob = l > 0.0f ? std::tanh(0.5 * static_cast<double>(l)) : 0.0;
+      const double prob = map_->occupancy_evidence(tx.first + i, ty.first + j);
       r0 += tx.w[ii] * prob;
       if (derivatives) {
         r1 += tx.dw[ii] * prob;

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <unordered_set>
+#include <utility>
+#include <vector>
 
 #include "../../robot/log_odds_beam.hpp"
 #include "implicit/core/error.hpp"
@@ -139,6 +141,20 @@ bool TiledLogOddsGrid::observed(int ix, int iy) const {
   return t && tiled_grid_seen(*t, tiled_grid_local(ix, iy));
 }
 
+int TiledLogOddsGrid::echoes(int ix, int iy) const {
+  const Tile* t = tile_at(ix, iy);
+  return t ? t->echoes[static_cast<std::size_t>(tiled_grid_local(ix, iy))] : 0;
+}
+
+double TiledLogOddsGrid::occupancy_evidence(int ix, int iy) const {
+  const Tile* t = tile_at(ix, iy);
+  if (!t) return 0.0;
+  const auto k = static_cast<std::size_t>(tiled_grid_local(ix, iy));
+  if (options_.min_echoes > 0 && t->echoes[k] >= options_.min_echoes) return 1.0;
+  const float l = t->log_odds[k];
+  return l > 0.0f ? std::tanh(0.5 * static_cast<double>(l)) : 0.0;
+}
+
 void TiledLogOddsGrid::cover(int tx0, int ty0, int tx1, int ty1) {
   if (!tiles_.empty() && slot_of_tile(tx0, ty0) >= 0 && slot_of_tile(tx1, ty1) >= 0) return;
   int nx0 = tx0, ny0 = ty0, nx1 = tx1, ny1 = ty1;
@@ -238,6 +254,10 @@ void TiledLogOddsGrid::integrate(const robot::Pose& robot_pose, const robot::Las
   const auto inside = [&](int ix, int iy) {
     return ix - cx0 >= 0 && iy - cy0 >= 0 && ix - cx0 < cw && iy - cy0 < ch;
   };
+  // The end cells of this scan's hits (relative to the index's corner), so that a scan counts
+  // once per cell: per thread, as the freed tiles are, so that no grid allocates for it.
+  thread_local std::vector<std::pair<int, int>> scan_ends;
+  scan_ends.clear();
   const auto update = [&](int ix, int iy, double delta) {
     const int rx = ix - cx0, ry = iy - cy0;
     const std::size_t slot =
@@ -250,6 +270,7 @@ void TiledLogOddsGrid::integrate(const robot::Pose& robot_pose, const robot::Las
     const int k = tiled_grid_local(rx, ry);
     float& v = cached->log_odds[static_cast<std::size_t>(k)];
     v = robot::detail::add_log_odds(v, delta, clamp);
+    if (delta > 0.0) scan_ends.emplace_back(rx, ry);  // only a hit adds
     cached->seen[static_cast<std::size_t>(k >> 6)] |= std::uint64_t{1} << (k & 63);
   };
   const int sx = static_cast<int>(std::floor(g.x())), sy = static_cast<int>(std::floor(g.y()));
@@ -260,6 +281,17 @@ void TiledLogOddsGrid::integrate(const robot::Pose& robot_pose, const robot::Las
     const Vec<2> d(std::cos(angle), std::sin(angle));
     robot::detail::trace_beam(g, d, sx, sy, use.length * inv_res, use.hit, options_, inside,
                               update);
+  }
+  // Each cell once per scan, so that one scan's beams ending together are one echo. The tiles
+  // of the end cells are this grid's own by now (written above).
+  std::sort(scan_ends.begin(), scan_ends.end());
+  scan_ends.erase(std::unique(scan_ends.begin(), scan_ends.end()), scan_ends.end());
+  for (const auto& [rx, ry] : scan_ends) {
+    const std::size_t slot =
+        static_cast<std::size_t>(ry >> kTileShift) * static_cast<std::size_t>(tiles_w_) +
+        static_cast<std::size_t>(rx >> kTileShift);
+    std::uint8_t& e = writable(slot).echoes[static_cast<std::size_t>(tiled_grid_local(rx, ry))];
+    if (e < 255) ++e;
   }
 }
 
@@ -289,7 +321,9 @@ robot::OccupancyGrid TiledLogOddsGrid::to_occupancy_grid() const {
   for (int iy = y0; iy <= y1; ++iy)
     for (int ix = x0; ix <= x1; ++ix)
       if (observed(ix, iy))
-        out.at(ix - x0, iy - y0) = robot::detail::occupancy_value(log_odds(ix, iy));
+        out.at(ix - x0, iy - y0) = options_.min_echoes > 0 && echoes(ix, iy) >= options_.min_echoes
+                                       ? std::int8_t{100}
+                                       : robot::detail::occupancy_value(log_odds(ix, iy));
   return out;
 }
 

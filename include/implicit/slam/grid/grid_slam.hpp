@@ -44,12 +44,15 @@ struct GridSlamOptions {
   std::size_t particles = 30;
   std::uint64_t seed = 1;
   double resample_threshold = 0.5;  ///< resample when N_eff < this * particles; in [0, 1]
-  /// The particles' maps and the reference map of the map score: both log-odds only (the tiled
-  /// grids count no echoes, so the reference the score compares them with counts none either).
+  /// The particles' maps and the reference map of the map score (the same options, so a filter
+  /// with every pose right draws the reference). min_echoes = 1: a cell where any scan's beam
+  /// ended stays occupied evidence for the scan match, however many beams cross it later. Beams
+  /// that graze a wall cross its cells before they end, and in log-odds alone the corridors
+  /// of Intel lost the walls the next scan has to match (spec §3.13.1, "Echoes").
   robot::GridMappingOptions map = [] {
     robot::GridMappingOptions m;
     m.max_range = 40.0;
-    m.min_echoes = 0;
+    m.min_echoes = 1;
     return m;
   }();
   ScanMatchParams scan;

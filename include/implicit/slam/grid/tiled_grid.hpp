@@ -64,6 +64,7 @@ class TiledLogOddsGrid {
   struct Tile {
     std::array<float, kTileCells> log_odds{};           ///< row-major, row 0 the lowest y
     std::array<std::uint64_t, kTileCells / 64> seen{};  ///< bit k: cell k was observed
+    std::array<std::uint8_t, kTileCells> echoes{};      ///< scans with a beam ending in the cell
   };
 
   /// Uses options.resolution as the cell size and the rest as the inverse sensor model
@@ -87,6 +88,11 @@ class TiledLogOddsGrid {
   /// 1 - 1 / (1 + exp(log-odds)): 1/2 for a cell never observed.
   double probability(int ix, int iy) const;
   bool observed(int ix, int iy) const;
+  /// The scans (up to 255) with a beam that ended in the cell.
+  int echoes(int ix, int iy) const;
+  /// The cell's occupancy evidence: 1 where beams of at least options().min_echoes (> 0) scans
+  /// ended, else max(0, 2p - 1) = max(0, tanh(log-odds / 2)).
+  double occupancy_evidence(int ix, int iy) const;
   /// The same for a cell given as world_to_cell returns it.
   float log_odds(const Eigen::Vector2i& cell) const { return log_odds(cell.x(), cell.y()); }
   double probability(const Eigen::Vector2i& cell) const { return probability(cell.x(), cell.y()); }
