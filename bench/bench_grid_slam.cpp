@@ -44,6 +44,7 @@
 #include "implicit/robot/carmen.hpp"
 #include "implicit/robot/grid_mapping.hpp"
 #include "implicit/slam/grid/grid_proposals.hpp"
+#include "implicit/slam/grid/grid_slam.hpp"
 #include "implicit/slam/grid/grid_slam_run.hpp"
 #include "implicit/slam/grid/map_update_gate.hpp"
 #include "implicit/slam/grid/scan_match.hpp"
@@ -65,6 +66,7 @@ struct GridScene {
 const GridScene& grid_scene() {
   static const GridScene scene = [] {
     GridScene s;
+    s.options = slam::GridSlamOptions{}.map;  // grid SLAM's: echoes counted (min_echoes 1)
     s.options.resolution = 0.05;
     s.options.max_range = 40.0;
     const std::filesystem::path file =
@@ -180,7 +182,8 @@ void memory(benchmark::State& state) {
         (static_cast<double>(index) + distinct * sizeof(TiledLogOddsGrid::Tile)) / double(m);
     alone = static_cast<double>(one.bytes().owned);
     const robot::OccupancyGrid extent = one.to_occupancy_grid();
-    dense = 5.0 * extent.width() * extent.height();  // LogOddsGrid: a float and a byte per cell
+    // LogOddsGrid: per cell a float of log-odds, a byte for "observed" and a byte of echoes.
+    dense = 6.0 * extent.width() * extent.height();
   }
   state.counters["bytes_per_particle"] = per_particle;
   state.counters["one_map_bytes"] = alone;

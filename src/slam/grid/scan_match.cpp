@@ -130,8 +130,9 @@ double GridScanModel::smoothed_occupancy(const Vec<2>& p, Vec<2>* gradient,
     double r0 = 0, r1 = 0, r2 = 0;  // the row's sums with w, dw and d2w along x
     for (int i = 0; i < tx.taps; ++i) {
       const auto ii = static_cast<std::size_t>(i);
-      // Occupancy evidence 2P - 1 = tanh(l / 2) where positive, else 0 (free and unknown
-      // alike): a wall seen once (P = 0.7) must stand out from the unknown space behind it.
+      // Occupancy evidence: 1 for a cell with enough echoes, else 2P - 1 = tanh(l / 2) where
+      // positive and 0 elsewhere (free and unknown alike): a wall seen once (P = 0.7) must
+      // stand out from the unknown space behind it.
       const double prob = map_->occupancy_evidence(tx.first + i, ty.first + j);
       r0 += tx.w[ii] * prob;
       if (derivatives) {

@@ -7,11 +7,11 @@
 //   log p(scan | x, map) = sum_i log( eps + (1 - eps) M(p_i(x)) )
 //
 // with M the cells' occupancy evidence O = max(0, 2P - 1) (P the occupancy probability; 0 in
-// free and unknown space alike) smoothed by a cubic B-spline kernel of `smoothing` cells
-// (Hector SLAM's interpolated map, with a wider basin; a convex combination of cells, so
-// 0 <= M <= 1) and eps the mixture floor: an end point in free or unknown space costs -log eps,
-// never -inf. Beams with no return are left out, and at most max_beams hits are used,
-// evenly spaced over the scan's hits.
+// free and unknown space alike; 1 in a cell with the map's min_echoes echoes) smoothed by a
+// cubic B-spline kernel of `smoothing` cells (Hector SLAM's interpolated map, with a wider
+// basin; a convex combination of cells, so 0 <= M <= 1) and eps the mixture floor: an end point
+// in free or unknown space costs -log eps, never -inf. Beams with no return are left out, and at
+// most max_beams hits are used, evenly spaced over the scan's hits.
 //
 //   slam::GridScanModel model(particle_map, params, mount);
 //   slam::ScanMatchBeams beams = model.prepare(scan, "scan 12");   // once per scan, shared

@@ -1,7 +1,7 @@
 #pragma once
-// The occupancy grid each particle of grid SLAM carries: log-odds (robot/grid_mapping.hpp's
-// inverse sensor model, cell by cell the same as LogOddsGrid), unbounded, in square tiles of
-// 32 x 32 cells shared between grids until one of them writes.
+// The occupancy grid each particle of grid SLAM carries: log-odds and echoes (robot/
+// grid_mapping.hpp's inverse sensor model, cell by cell the same as LogOddsGrid), unbounded, in
+// square tiles of 32 x 32 cells shared between grids until one of them writes.
 //
 // A Rao-Blackwellized particle filter copies maps at every resampling: M particles, each with a
 // map of the whole area seen so far. A dense copy would cost the whole map per particle; here a
