@@ -23,7 +23,10 @@ struct GridLog {
   const char* file;  ///< relative to the share tree's data folder
   std::size_t particles;
   std::size_t max_scans;  ///< 0: all
-  bool figure;            ///< its first runs are the figure's
+  bool figure;            ///< its first runs are the figure's main panels
+  /// Else, when not empty: its first implicit run is a map panel below them, in the files
+  /// grid_slam_<tag>_*.csv (python/plots/figure11.py).
+  const char* map_tag = "";
 };
 
 struct GridPoint {
@@ -53,9 +56,12 @@ json run_grid_point(const GridPoint& p, const RunContext& ctx) {
   const std::string label =
       fmt::format("grid SLAM {} {} M={}", p.log.name, slam::to_string(p.proposal), p.log.particles);
   Progress bar(label, static_cast<std::size_t>(p.runs) * 1000, ctx.show_progress());
+  const bool implicit = p.proposal == GridProposalKind::kImplicit;
+  const bool map_panel = !p.log.figure && *p.log.map_tag != '\0' && implicit;
   json j = experiments::run_grid_slam_reproduce(
-      s, p.log.figure ? ctx.out_dir : std::filesystem::path(),
-      p.log.figure && p.proposal == GridProposalKind::kImplicit, grid_slam_progress(bar));
+      s, p.log.figure || map_panel ? ctx.out_dir : std::filesystem::path(),
+      (p.log.figure || map_panel) && implicit, grid_slam_progress(bar),
+      map_panel ? fmt::format("grid_slam_{}", p.log.map_tag) : std::string("grid_slam"));
   bar.finish();
   // The data as the plan names it: the absolute path of the share tree says nothing portable.
   j["data"] = p.log.file;
@@ -71,10 +77,10 @@ void add_grid_slam(Plan& plan, bool quick) {
   // "Grid SLAM"); quick: the first 40 scans of ACES.
   const std::vector<GridLog> logs =
       quick ? std::vector<GridLog>{{"ACES", "carmen/aces-corrected.log.gz", 8, 40, true}}
-            : std::vector<GridLog>{
-                  {"Intel", "carmen/intel-corrected.log.gz", 8, 0, true},
-                  {"ACES", "carmen/aces-corrected.log.gz", 15, 0, false},
-                  {"Freiburg 079", "carmen/freiburg-079-corrected.log.gz", 5, 0, false}};
+            : std::vector<GridLog>{{"Intel", "carmen/intel-corrected.log.gz", 8, 0, true},
+                                   {"ACES", "carmen/aces-corrected.log.gz", 15, 0, false, "aces"},
+                                   {"Freiburg 079", "carmen/freiburg-079-corrected.log.gz", 5, 0,
+                                    false, "freiburg-079"}};
   const int runs = quick ? 2 : 10;
   json configurations = json::array();
   for (const GridLog& log : logs)
@@ -86,10 +92,13 @@ void add_grid_slam(Plan& plan, bool quick) {
       // 27 of the quick run's 40) times particles times 2 ms (0.5 ms for the bootstrap).
       const double scans = quick ? 27.0 : 500.0;
       const double per_particle = kind == GridProposalKind::kBootstrap ? 5e-4 : 2e-3;
+      // Its files are the figure's: the main panels' runs, and the other logs' map panels.
+      const bool figure =
+          log.figure || (*log.map_tag != '\0' && kind == GridProposalKind::kImplicit);
       plan.configs.push_back(
           {"grid_slam",
            fmt::format("grid SLAM {} {} M={}", log.name, slam::to_string(kind), log.particles),
-           to_json(p), runs * scans * static_cast<double>(log.particles) * per_particle, log.figure,
+           to_json(p), runs * scans * static_cast<double>(log.particles) * per_particle, figure,
            [p](const RunContext& ctx) { return run_grid_point(p, ctx); }});
     }
   // The settings every configuration shares: GridSlamRunOptions' defaults, stated for the report.
@@ -105,7 +114,8 @@ void add_grid_slam(Plan& plan, bool quick) {
       {"implicit_starts", d.implicit.starts},
       {"map_min_echoes", d.filter.map.min_echoes},
       {"figure_data", quick ? "first run of each proposal on the first 40 scans of ACES"
-                            : "first run of each proposal on Intel, M = 8"}};
+                            : "first run of each proposal on Intel, M = 8; first implicit run "
+                              "on ACES (M = 15) and Freiburg 079 (M = 5)"}};
 }
 
 }  // namespace implicit::app

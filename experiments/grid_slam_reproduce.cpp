@@ -6,6 +6,8 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -52,6 +54,16 @@ std::string grid_track_csv(const slam::GridSlamRun& run) {
   return out;
 }
 
+// The names of the figure's files: reference, track, and map when `with_map`.
+std::vector<std::string> grid_slam_figure_files(const GridSlamResult& r, bool with_map,
+                                                std::string_view prefix) {
+  std::vector<std::string> names{
+      fmt::format("{}_reference.csv", prefix),
+      fmt::format("{}_track_{}.csv", prefix, slam::to_string(r.settings.run.proposal))};
+  if (with_map) names.push_back(fmt::format("{}_map.csv", prefix));
+  return names;
+}
+
 }  // namespace
 
 std::shared_ptr<const robot::CarmenLog> cached_carmen_log(const std::filesystem::path& path) {
@@ -65,7 +77,7 @@ std::shared_ptr<const robot::CarmenLog> cached_carmen_log(const std::filesystem:
 }
 
 void write_grid_slam_figure_files(const GridSlamResult& r, const std::filesystem::path& dir,
-                                  bool with_map) {
+                                  bool with_map, std::string_view prefix) {
   require(r.first.has_value(),
           "grid_slam figure: expected the first run kept (keep_first), got none");
   std::error_code ec;
@@ -75,17 +87,15 @@ void write_grid_slam_figure_files(const GridSlamResult& r, const std::filesystem
   const slam::GridSlamRun& run = *r.first;
   // Written under a temporary name and renamed: a killed run never leaves half a file that the
   // figure script would draw.
-  write_output_file(dir / "grid_slam_reference.csv", grid_reference_csv(run), "grid_slam figure");
-  write_output_file(
-      dir / fmt::format("grid_slam_track_{}.csv", slam::to_string(r.settings.run.proposal)),
-      grid_track_csv(run), "grid_slam figure");
-  if (with_map)
-    write_output_file(dir / "grid_slam_map.csv", occupied_cells_csv(run.map), "grid_slam figure");
+  const std::vector<std::string> names = grid_slam_figure_files(r, with_map, prefix);
+  write_output_file(dir / names[0], grid_reference_csv(run), "grid_slam figure");
+  write_output_file(dir / names[1], grid_track_csv(run), "grid_slam figure");
+  if (with_map) write_output_file(dir / names[2], occupied_cells_csv(run.map), "grid_slam figure");
 }
 
 nlohmann::json run_grid_slam_reproduce(GridSlamSettings settings,
                                        const std::filesystem::path& figure_dir, bool with_map,
-                                       const GridSlamProgress& progress) {
+                                       const GridSlamProgress& progress, std::string_view prefix) {
   settings.validate();
   const auto start = std::chrono::steady_clock::now();
   const auto log = cached_carmen_log(settings.data);
@@ -98,11 +108,9 @@ nlohmann::json run_grid_slam_reproduce(GridSlamSettings settings,
   j["read_seconds"] = read_seconds;
   nlohmann::json files = nlohmann::json::array();
   if (figure) {
-    write_grid_slam_figure_files(r, figure_dir, with_map);
-    files.push_back("grid_slam_reference.csv");
-    files.push_back(
-        fmt::format("grid_slam_track_{}.csv", slam::to_string(r.settings.run.proposal)));
-    if (with_map) files.push_back("grid_slam_map.csv");
+    write_grid_slam_figure_files(r, figure_dir, with_map, prefix);
+    for (const std::string& name : grid_slam_figure_files(r, with_map, prefix))
+      files.push_back(name);
   }
   j["figure_files"] = files;
   return j;

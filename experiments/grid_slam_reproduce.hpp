@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
@@ -30,16 +31,20 @@ std::shared_ptr<const robot::CarmenLog> cached_carmen_log(const std::filesystem:
 ///                                  relation ending at each scan (empty at the first scan)
 ///   grid_slam_map.csv              x_m,y_m,resolution_m: the occupied cells of the first run's
 ///                                  map (only when `with_map`)
-/// time_s counts from the first processed scan. Each file is written under a temporary name and
-/// renamed into place. Throws InvalidArgument naming the file when one cannot be written.
+/// time_s counts from the first processed scan; `prefix` replaces "grid_slam" in the names (the
+/// map panels of the other logs: "grid_slam_aces", ...). Each file is written under a temporary
+/// name and renamed into place. Throws InvalidArgument naming the file when one cannot be
+/// written.
 void write_grid_slam_figure_files(const GridSlamResult& r, const std::filesystem::path& dir,
-                                  bool with_map);
+                                  bool with_map, std::string_view prefix = "grid_slam");
 
 /// Runs `settings` on the cached log. With a non-empty `figure_dir` keeps the first run and
-/// writes its track (and the map when `with_map`) there. Returns to_json(result) and "figure_files"
-/// (the names written) and "read_seconds" (reading the log; about 0 when it came from the cache).
+/// writes its track (and the map when `with_map`) there, named by `prefix`. Returns
+/// to_json(result) and "figure_files" (the names written) and "read_seconds" (reading the log;
+/// about 0 when it came from the cache).
 nlohmann::json run_grid_slam_reproduce(GridSlamSettings settings,
                                        const std::filesystem::path& figure_dir, bool with_map,
-                                       const GridSlamProgress& progress = {});
+                                       const GridSlamProgress& progress = {},
+                                       std::string_view prefix = "grid_slam");
 
 }  // namespace implicit::experiments

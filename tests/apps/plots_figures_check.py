@@ -162,6 +162,17 @@ def make_data():
                   ["scan", "time_s", "x_m", "y_m", "heading_rad", "relation_error_m"],
                   [(k, 2.0 * k, 0.5 * k, scale * (k % 4), 0.0,
                     "" if k == 0 else scale * (1 + k % 4)) for k in range(30)])
+    # ... and the other logs' panels: rooms of 10 x 6 m and 30 x 4 m, offset from the origin.
+    for tag, (w, h, dx) in (("aces", (10.0, 6.0, -40.0)), ("freiburg-079", (30.0, 4.0, 5.0))):
+        write_csv(f"grid_slam_{tag}_map.csv", ["x_m", "y_m", "resolution_m"],
+                  [(dx + 0.05 * i, y, 0.05) for i in range(int(w / 0.05) + 1) for y in (0, h)])
+        write_csv(f"grid_slam_{tag}_reference.csv", ["scan", "time_s", "x_m", "y_m",
+                                                     "heading_rad"],
+                  [(k, 2.0 * k, dx + w * k / 20, h / 2, 0.0) for k in range(21)])
+        write_csv(f"grid_slam_{tag}_track_implicit.csv",
+                  ["scan", "time_s", "x_m", "y_m", "heading_rad", "relation_error_m"],
+                  [(k, 2.0 * k, dx + w * k / 20, h / 2 + 0.1, 0.0, "" if k == 0 else 0.01)
+                   for k in range(21)])
 
     # Figure 12: the three settings; one row without an interval (one seed), rows without DAPPER.
     write_csv("table_da.csv",
@@ -307,6 +318,16 @@ def check_figure11(fig):
           f"figure11: the map panel x {x0:.1f}..{x1:.1f}, y {y0:.1f}..{y1:.1f} cuts the map")
     names = [t.get_text() for t in ax.get_legend().get_texts()] if ax.get_legend() else []
     check(len(names) == 4, f"figure11: expected the reference and three proposals, got {names}")
+    # The other logs' maps below, each panel holding its room (ACES x -40..-30, y 0..6; Freiburg
+    # 079 x 5..35, y 0..4).
+    check(len(fig.axes) == 4, f"figure11: expected 4 panels with the other logs, got "
+                              f"{len(fig.axes)}")
+    for ax, title, (lo, hi) in zip(fig.axes[2:], ("ACES", "Freiburg 079"),
+                                   (((-40, 0), (-30, 6)), ((5, 0), (35, 4)))):
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        check(title in ax.get_title() and x0 <= lo[0] and y0 <= lo[1] and x1 >= hi[0]
+              and y1 >= hi[1], f"figure11: the {title} panel '{ax.get_title()}' x "
+                               f"{x0:.1f}..{x1:.1f}, y {y0:.1f}..{y1:.1f}")
 
 
 def check_figure12(fig):
@@ -357,6 +378,15 @@ for number in (1, 2, 4, 5, 6, 7, 8, 9, 10, 11, 12):
     {8: check_figure8, 9: check_figure9, 10: check_figure10,
      11: check_figure11, 12: check_figure12}.get(number, lambda f: None)(figure)
     check((tmp / f"figure{number}.png").is_file(), f"figure{number}: no PNG written")
+
+# Figure 11 with one of another log's three files gone: an error naming it, not a panel short.
+(tmp / "grid_slam_freiburg-079_map.csv").unlink()
+try:
+    importlib.import_module("figure11").draw(tmp)
+    check(False, "figure11: drew without grid_slam_freiburg-079_map.csv")
+except common.DataError as e:
+    check("missing grid_slam_freiburg-079_map.csv" in str(e),
+          f"figure11: the error does not name the missing file: {e}")
 
 if FAILURES:
     print("\n".join(FAILURES))
