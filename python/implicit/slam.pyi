@@ -37,7 +37,8 @@ def grid(data: Union[str, "PathLike[str]", dict[str, Any]], method: str = "impli
          particles: int = 30, seed: int = 1,
          alphas: npt.ArrayLike = (0.002, 0.002, 0.002, 0.002), max_scans: int = 0,
          threads: int = 0,
-         progress: Optional[Callable[[int, int], Any]] = None) -> dict[str, Any]:
+         progress: Optional[Callable[[int, int], Any]] = None,
+         map_min_echoes: int = 1) -> dict[str, Any]:
     """Grid SLAM on a CARMEN laser log, one run of `implicit slam --sensor laser`: trajectory
     and reference (n, 3), times (n,), map int8 (height, width) (-1 unknown, 0..100; row 0 the
     lowest y), resolution, origin, grid (an implicit.laser.OccupancyGrid or None), the relation
