@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "apps/cli_runner.hpp"
@@ -158,6 +159,25 @@ TEST(GridSlamExperiment, TheFigureFilesAreTheFirstRunsTrackRelationsAndMap) {
     for (int ix = 0; ix < run.map.width(); ++ix) occupied += run.map.is_occupied(ix, iy) ? 1 : 0;
   EXPECT_GT(occupied, 0u);
   EXPECT_EQ(csv_rows(dir.path() / "grid_slam_map.csv").size(), occupied + 1);
+}
+
+// Another log's map panel: the same files under its prefix, the same bytes.
+TEST(GridSlamExperiment, APrefixNamesTheFilesOfAnotherLogsMapPanel) {
+  TempDir plain("grid_slam_figure_plain"), named("grid_slam_figure_named");
+  GridSlamSettings s = short_aces(slam::GridProposalKind::kImplicit);
+  s.runs = 1;
+  run_grid_slam_reproduce(s, plain.path(), true);
+  const nlohmann::json j = run_grid_slam_reproduce(s, named.path(), true, {}, "grid_slam_aces");
+  EXPECT_EQ(j["figure_files"],
+            (nlohmann::json{"grid_slam_aces_reference.csv", "grid_slam_aces_track_implicit.csv",
+                            "grid_slam_aces_map.csv"}));
+  for (const char* part : {"reference", "track_implicit", "map"}) {
+    const auto a = csv_rows(plain.path() / fmt::format("grid_slam_{}.csv", part));
+    const auto b = csv_rows(named.path() / fmt::format("grid_slam_aces_{}.csv", part));
+    EXPECT_GT(a.size(), 1u) << part;
+    EXPECT_EQ(a, b) << part;
+  }
+  EXPECT_FALSE(std::filesystem::exists(named.path() / "grid_slam_map.csv"));
 }
 
 TEST(GridSlamExperiment, BadSettingsAndAMissingFirstRunAreNamed) {
