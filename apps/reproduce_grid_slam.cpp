@@ -29,6 +29,12 @@ struct GridLog {
   const char* map_tag = "";
 };
 
+/// Whether a run of `kind` on `log` writes figure files: all of the main panels' log, and the
+/// implicit run of a log with a map panel.
+bool writes_figure(const GridLog& log, GridProposalKind kind) {
+  return log.figure || (*log.map_tag != '\0' && kind == GridProposalKind::kImplicit);
+}
+
 struct GridPoint {
   GridLog log;
   GridProposalKind proposal;
@@ -56,12 +62,11 @@ json run_grid_point(const GridPoint& p, const RunContext& ctx) {
   const std::string label =
       fmt::format("grid SLAM {} {} M={}", p.log.name, slam::to_string(p.proposal), p.log.particles);
   Progress bar(label, static_cast<std::size_t>(p.runs) * 1000, ctx.show_progress());
-  const bool implicit = p.proposal == GridProposalKind::kImplicit;
-  const bool map_panel = !p.log.figure && *p.log.map_tag != '\0' && implicit;
+  const bool figure = writes_figure(p.log, p.proposal);
   json j = experiments::run_grid_slam_reproduce(
-      s, p.log.figure || map_panel ? ctx.out_dir : std::filesystem::path(),
-      (p.log.figure || map_panel) && implicit, grid_slam_progress(bar),
-      map_panel ? fmt::format("grid_slam_{}", p.log.map_tag) : std::string("grid_slam"));
+      s, figure ? ctx.out_dir : std::filesystem::path(),
+      figure && p.proposal == GridProposalKind::kImplicit, grid_slam_progress(bar),
+      p.log.figure ? std::string("grid_slam") : fmt::format("grid_slam_{}", p.log.map_tag));
   bar.finish();
   // The data as the plan names it: the absolute path of the share tree says nothing portable.
   j["data"] = p.log.file;
@@ -92,13 +97,11 @@ void add_grid_slam(Plan& plan, bool quick) {
       // 27 of the quick run's 40) times particles times 2 ms (0.5 ms for the bootstrap).
       const double scans = quick ? 27.0 : 500.0;
       const double per_particle = kind == GridProposalKind::kBootstrap ? 5e-4 : 2e-3;
-      // Its files are the figure's: the main panels' runs, and the other logs' map panels.
-      const bool figure =
-          log.figure || (*log.map_tag != '\0' && kind == GridProposalKind::kImplicit);
       plan.configs.push_back(
           {"grid_slam",
            fmt::format("grid SLAM {} {} M={}", log.name, slam::to_string(kind), log.particles),
-           to_json(p), runs * scans * static_cast<double>(log.particles) * per_particle, figure,
+           to_json(p), runs * scans * static_cast<double>(log.particles) * per_particle,
+           writes_figure(log, kind),
            [p](const RunContext& ctx) { return run_grid_point(p, ctx); }});
     }
   // The settings every configuration shares: GridSlamRunOptions' defaults, stated for the report.

@@ -146,10 +146,15 @@ int TiledLogOddsGrid::echoes(int ix, int iy) const {
   return t ? t->echoes[static_cast<std::size_t>(tiled_grid_local(ix, iy))] : 0;
 }
 
+bool TiledLogOddsGrid::echoed(int ix, int iy) const {
+  return options_.min_echoes > 0 && echoes(ix, iy) >= options_.min_echoes;
+}
+
 double TiledLogOddsGrid::occupancy_evidence(int ix, int iy) const {
   const Tile* t = tile_at(ix, iy);
   if (!t) return 0.0;
   const auto k = static_cast<std::size_t>(tiled_grid_local(ix, iy));
+  // echoed(ix, iy) without a second lookup: the scan match's inner loop.
   if (options_.min_echoes > 0 && t->echoes[k] >= options_.min_echoes) return 1.0;
   const float l = t->log_odds[k];
   return l > 0.0f ? std::tanh(0.5 * static_cast<double>(l)) : 0.0;
@@ -321,9 +326,8 @@ robot::OccupancyGrid TiledLogOddsGrid::to_occupancy_grid() const {
   for (int iy = y0; iy <= y1; ++iy)
     for (int ix = x0; ix <= x1; ++ix)
       if (observed(ix, iy))
-        out.at(ix - x0, iy - y0) = options_.min_echoes > 0 && echoes(ix, iy) >= options_.min_echoes
-                                       ? std::int8_t{100}
-                                       : robot::detail::occupancy_value(log_odds(ix, iy));
+        out.at(ix - x0, iy - y0) =
+            echoed(ix, iy) ? std::int8_t{100} : robot::detail::occupancy_value(log_odds(ix, iy));
   return out;
 }
 

@@ -90,6 +90,8 @@ class TiledLogOddsGrid {
   bool observed(int ix, int iy) const;
   /// The scans (up to 255) with a beam that ended in the cell.
   int echoes(int ix, int iy) const;
+  /// At least options().min_echoes (> 0) of them: occupied whatever the log-odds.
+  bool echoed(int ix, int iy) const;
   /// The cell's occupancy evidence: 1 where beams of at least options().min_echoes (> 0) scans
   /// ended, else max(0, 2p - 1) = max(0, tanh(log-odds / 2)).
   double occupancy_evidence(int ix, int iy) const;
