@@ -92,14 +92,10 @@ void LogOddsGrid::integrate(const Pose& robot_pose, const LaserMount& mount,
     if (fx >= 0 && fy >= 0 && fx < width_ && fy < height_)
       scan_ends_.push_back(index(static_cast<int>(fx), static_cast<int>(fy)));
   }
-  // An echo counts once per scan: neighbouring beams of one scan often end in one cell, and a
-  // single scan of a passer-by must not make a wall.
-  std::sort(scan_ends_.begin(), scan_ends_.end());
-  scan_ends_.erase(std::unique(scan_ends_.begin(), scan_ends_.end()), scan_ends_.end());
-  for (std::size_t k : scan_ends_) {
-    if (echoes_[k] < 255) ++echoes_[k];
+  detail::count_scan_echoes(scan_ends_, [&](std::size_t k) -> std::uint8_t& {
     observed_[k] = 1;  // the trace's end cell; set here too in case rounding put them apart
-  }
+    return echoes_[k];
+  });
 }
 
 OccupancyGrid LogOddsGrid::to_occupancy() const {
@@ -107,7 +103,7 @@ OccupancyGrid LogOddsGrid::to_occupancy() const {
   for (int iy = 0; iy < height_; ++iy)
     for (int ix = 0; ix < width_; ++ix) {
       if (!observed(ix, iy)) continue;
-      const bool echoed = options_.min_echoes > 0 && echoes(ix, iy) >= options_.min_echoes;
+      const bool echoed = detail::echoed(echoes(ix, iy), options_);
       out.at(ix, iy) =
           echoed ? OccupancyGrid::kOccupied : detail::occupancy_value(log_odds(ix, iy));
     }

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
+#include <vector>
 
 #include "grid_walk.hpp"
 #include "implicit/core/error.hpp"
@@ -40,6 +41,26 @@ inline BeamUse beam_use(const LaserScan& scan, std::size_t i, double max_range) 
 /// below what an inverse sensor model means).
 inline float add_log_odds(float old, double delta, double clamp) {
   return static_cast<float>(std::clamp(double(old) + delta, -clamp, clamp));
+}
+
+/// Whether a cell with `echoes` echoes is occupied whatever its log-odds
+/// (GridMappingOptions::min_echoes; 0: never).
+inline bool echoed(int echoes, const GridMappingOptions& options) {
+  return options.min_echoes > 0 && echoes >= options.min_echoes;
+}
+
+/// Counts the echoes of one scan: `ends` holds the end cells of its hits (any order, repeats
+/// allowed; sorted and deduplicated here), and each distinct cell's counter echo_of(cell) goes up
+/// by one, saturating at 255. Once per scan: neighbouring beams of one scan often end in one
+/// cell, and a single scan of a passer-by must not count twice.
+template <class Cell, class EchoOf>
+void count_scan_echoes(std::vector<Cell>& ends, EchoOf&& echo_of) {
+  std::sort(ends.begin(), ends.end());
+  ends.erase(std::unique(ends.begin(), ends.end()), ends.end());
+  for (const Cell& c : ends) {
+    std::uint8_t& e = echo_of(c);
+    if (e < 255) ++e;
+  }
 }
 
 /// round(100 p) with p = 1 - 1 / (1 + exp(log-odds)): an observed cell's OccupancyGrid value.

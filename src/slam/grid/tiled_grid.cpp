@@ -147,15 +147,15 @@ int TiledLogOddsGrid::echoes(int ix, int iy) const {
 }
 
 bool TiledLogOddsGrid::echoed(int ix, int iy) const {
-  return options_.min_echoes > 0 && echoes(ix, iy) >= options_.min_echoes;
+  return robot::detail::echoed(echoes(ix, iy), options_);
 }
 
 double TiledLogOddsGrid::occupancy_evidence(int ix, int iy) const {
   const Tile* t = tile_at(ix, iy);
   if (!t) return 0.0;
   const auto k = static_cast<std::size_t>(tiled_grid_local(ix, iy));
-  // echoed(ix, iy) without a second lookup: the scan match's inner loop.
-  if (options_.min_echoes > 0 && t->echoes[k] >= options_.min_echoes) return 1.0;
+  if (robot::detail::echoed(t->echoes[k], options_))
+    return 1.0;  // one lookup: the scan match's loop
   const float l = t->log_odds[k];
   return l > 0.0f ? std::tanh(0.5 * static_cast<double>(l)) : 0.0;
 }
@@ -287,17 +287,14 @@ void TiledLogOddsGrid::integrate(const robot::Pose& robot_pose, const robot::Las
     robot::detail::trace_beam(g, d, sx, sy, use.length * inv_res, use.hit, options_, inside,
                               update);
   }
-  // Each cell once per scan, so that one scan's beams ending together are one echo. The tiles
-  // of the end cells are this grid's own by now (written above).
-  std::sort(scan_ends.begin(), scan_ends.end());
-  scan_ends.erase(std::unique(scan_ends.begin(), scan_ends.end()), scan_ends.end());
-  for (const auto& [rx, ry] : scan_ends) {
+  // The tiles of the end cells are this grid's own by now (written above).
+  robot::detail::count_scan_echoes(scan_ends, [&](const std::pair<int, int>& c) -> std::uint8_t& {
+    const auto [rx, ry] = c;
     const std::size_t slot =
         static_cast<std::size_t>(ry >> kTileShift) * static_cast<std::size_t>(tiles_w_) +
         static_cast<std::size_t>(rx >> kTileShift);
-    std::uint8_t& e = writable(slot).echoes[static_cast<std::size_t>(tiled_grid_local(rx, ry))];
-    if (e < 255) ++e;
-  }
+    return writable(slot).echoes[static_cast<std::size_t>(tiled_grid_local(rx, ry))];
+  });
 }
 
 robot::OccupancyGrid TiledLogOddsGrid::to_occupancy_grid() const {
